@@ -1,0 +1,1 @@
+"""Motion: leg kinematics, gaits, swing trajectories and the walking controller."""

@@ -1,0 +1,230 @@
+"""Leg kinematics of a hexapod: body <-> leg frames, inverse and forward kinematics, Jacobian.
+
+Convention (derived in ``docs/frames.md``; it fixes the inconsistent thesis eqs. 5.2-5.9):
+the leg frame ``L_i`` has its origin on the coxa axis, ``x`` pointing out along the leg's
+mount yaw and ``z`` up. With ``theta1`` the coxa yaw, ``theta2`` the femur elevation above
+horizontal and ``theta3`` the tibia angle relative to the femur's extension (negative bends
+the foot down)::
+
+    d = L1 + L2 cos(theta2) + L3 cos(theta2 + theta3)     # horizontal reach
+    x = d cos(theta1),  y = d sin(theta1)
+    z = L2 sin(theta2) + L3 sin(theta2 + theta3)
+
+Inverse kinematics picks the knee-up branch (``theta3 <= 0``), the posture of the thesis'
+robot. Arrays are vectorised over legs: a leading axis of length 6 follows spec order.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.errors import SingularConfigurationError, UnreachableTargetError
+from footfall.robot.spec import HexapodSpec
+
+# Joint limits and reach are checked with this slack, so targets computed from FK of an
+# in-range pose never fail on rounding [rad] and [m].
+_TOLERANCE = 1e-9
+
+
+class LegKinematics:
+    """Kinematics of all six legs of one robot.
+
+    Args:
+        spec: The robot description.
+    """
+
+    def __init__(self, spec: HexapodSpec) -> None:
+        self.spec = spec
+        self.names = spec.leg_names
+        self.L1 = spec.coxa_length
+        self.L2 = spec.femur_length
+        self.L3 = spec.tibia_length
+        self.mounts_in_body = spec.mount_positions_in_body
+        yaws = spec.mount_yaws
+        self._cos_yaw = np.cos(yaws)
+        self._sin_yaw = np.sin(yaws)
+        self.lower = spec.limits.lower
+        self.upper = spec.limits.upper
+
+    # Frames ---------------------------------------------------------------------------
+    def body_to_leg(self, points_in_body: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Express one point per leg, given in the body frame, in that leg's frame (eq. A.8).
+
+        Args:
+            points_in_body: Shape (6, 3) [m].
+
+        Returns:
+            Shape (6, 3) [m].
+        """
+        p = np.asarray(points_in_body, dtype=np.float64) - self.mounts_in_body
+        out = np.empty_like(p)
+        out[:, 0] = self._cos_yaw * p[:, 0] + self._sin_yaw * p[:, 1]
+        out[:, 1] = -self._sin_yaw * p[:, 0] + self._cos_yaw * p[:, 1]
+        out[:, 2] = p[:, 2]
+        return out
+
+    def leg_to_body(self, points_in_leg: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Inverse of :meth:`body_to_leg`; shape (6, 3) in and out [m]."""
+        p = np.asarray(points_in_leg, dtype=np.float64)
+        out = np.empty_like(p)
+        out[:, 0] = self._cos_yaw * p[:, 0] - self._sin_yaw * p[:, 1]
+        out[:, 1] = self._sin_yaw * p[:, 0] + self._cos_yaw * p[:, 1]
+        out[:, 2] = p[:, 2]
+        return out + self.mounts_in_body
+
+    def vectors_body_to_leg(self, vectors_in_body: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Rotate free vectors (velocities), shape (6, 3), from the body to each leg frame."""
+        v = np.asarray(vectors_in_body, dtype=np.float64)
+        out = np.empty_like(v)
+        out[:, 0] = self._cos_yaw * v[:, 0] + self._sin_yaw * v[:, 1]
+        out[:, 1] = -self._sin_yaw * v[:, 0] + self._cos_yaw * v[:, 1]
+        out[:, 2] = v[:, 2]
+        return out
+
+    # Kinematics in the leg frame ---------------------------------------------------------
+    def forward(self, angles: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Foot positions in each leg frame from joint angles.
+
+        Args:
+            angles: ``(theta1, theta2, theta3)`` per leg, shape (..., 3) [rad].
+
+        Returns:
+            Foot positions, shape (..., 3) [m].
+        """
+        q = np.asarray(angles, dtype=np.float64)
+        t1, t2, t23 = q[..., 0], q[..., 1], q[..., 1] + q[..., 2]
+        d = self.L1 + self.L2 * np.cos(t2) + self.L3 * np.cos(t23)
+        z = self.L2 * np.sin(t2) + self.L3 * np.sin(t23)
+        return np.stack([d * np.cos(t1), d * np.sin(t1), z], axis=-1)
+
+    def inverse(self, feet_in_leg: npt.ArrayLike, check_limits: bool = True) -> npt.NDArray[np.float64]:
+        """Joint angles that put each foot on its target (knee-up branch).
+
+        Args:
+            feet_in_leg: Foot targets in the leg frames, shape (6, 3) [m].
+            check_limits: Also reject solutions outside the joint limits.
+
+        Returns:
+            Joint angles, shape (6, 3) [rad].
+
+        Raises:
+            UnreachableTargetError: A target is farther than the stretched leg, closer than the
+                folded leg, or needs a joint beyond its limits. The error names the first such
+                leg and, for reach, by how much the target is out of reach.
+        """
+        p = np.asarray(feet_in_leg, dtype=np.float64)
+        x, y, z = p[..., 0], p[..., 1], p[..., 2]
+        d = np.hypot(x, y)
+        r = d - self.L1
+        c_sq = r * r + z * z
+        c = np.sqrt(c_sq)
+        max_reach = self.L2 + self.L3
+        min_reach = abs(self.L2 - self.L3)
+        bad = (c > max_reach + _TOLERANCE) | (c < min_reach - _TOLERANCE)
+        if np.any(bad):
+            i = int(np.flatnonzero(bad.ravel())[0])
+            ci = float(c.ravel()[i])
+            if ci > max_reach:
+                excess, what = ci - max_reach, "farther than the stretched leg"
+            else:
+                excess, what = min_reach - ci, "closer than the folded leg"
+            raise UnreachableTargetError(
+                self.names[i % len(self.names)],
+                f"target {np.round(p.reshape(-1, 3)[i], 4).tolist()} m (leg frame) is {what}, "
+                f"out of reach by {excess:.4f} m",
+                excess,
+            )
+        cos_knee = np.clip((c_sq - self.L2**2 - self.L3**2) / (2.0 * self.L2 * self.L3), -1.0, 1.0)
+        t3 = -np.arccos(cos_knee)
+        t2 = np.arctan2(z, r) - np.arctan2(self.L3 * np.sin(t3), self.L2 + self.L3 * np.cos(t3))
+        t1 = np.arctan2(y, x)
+        angles = np.stack([t1, t2, t3], axis=-1)
+        if check_limits:
+            self.check_limits(angles)
+        return angles
+
+    def check_limits(self, angles: npt.ArrayLike) -> None:
+        """Raise :class:`UnreachableTargetError` if any angle, shape (6, 3), is out of range."""
+        q = np.asarray(angles, dtype=np.float64).reshape(-1, 3)
+        low = q < self.lower - _TOLERANCE
+        high = q > self.upper + _TOLERANCE
+        if np.any(low | high):
+            i, j = (int(k) for k in np.argwhere(low | high)[0])
+            joint = ("coxa", "femur", "tibia")[j]
+            bound = self.lower[j] if low[i, j] else self.upper[j]
+            raise UnreachableTargetError(
+                self.names[i % len(self.names)],
+                f"target needs {joint} angle {np.degrees(q[i, j]):.1f} deg, beyond its limit "
+                f"{np.degrees(bound):.1f} deg "
+                f"(range {np.degrees(self.lower[j]):.1f}..{np.degrees(self.upper[j]):.1f} deg)",
+                float("nan"),
+            )
+
+    def jacobian(self, angles: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Foot-velocity Jacobian d(foot in leg)/d(angles), derived from :meth:`forward`.
+
+        Args:
+            angles: Shape (..., 3) [rad].
+
+        Returns:
+            Shape (..., 3, 3): rows x, y, z; columns coxa, femur, tibia [m / rad].
+        """
+        q = np.asarray(angles, dtype=np.float64)
+        t1, t2, t23 = q[..., 0], q[..., 1], q[..., 1] + q[..., 2]
+        c1, s1 = np.cos(t1), np.sin(t1)
+        d = self.L1 + self.L2 * np.cos(t2) + self.L3 * np.cos(t23)
+        dd2 = -self.L2 * np.sin(t2) - self.L3 * np.sin(t23)
+        dd3 = -self.L3 * np.sin(t23)
+        dz2 = self.L2 * np.cos(t2) + self.L3 * np.cos(t23)
+        dz3 = self.L3 * np.cos(t23)
+        zero = np.zeros_like(t1)
+        return np.stack(
+            [
+                np.stack([-d * s1, dd2 * c1, dd3 * c1], axis=-1),
+                np.stack([d * c1, dd2 * s1, dd3 * s1], axis=-1),
+                np.stack([zero, dz2, dz3], axis=-1),
+            ],
+            axis=-2,
+        )
+
+    def joint_rates(
+        self, angles: npt.ArrayLike, foot_velocities_in_leg: npt.ArrayLike
+    ) -> npt.NDArray[np.float64]:
+        """Joint rates that move each foot with the given velocity (replaces thesis eq. 5.9).
+
+        Args:
+            angles: Current joint angles, shape (6, 3) [rad].
+            foot_velocities_in_leg: Foot velocities in the leg frames, shape (6, 3) [m/s].
+
+        Returns:
+            Joint rates, shape (6, 3) [rad/s].
+
+        Raises:
+            SingularConfigurationError: A leg is stretched straight (``sin(theta3) ~ 0``) or its
+                foot is on the coxa axis, where the Jacobian (determinant
+                ``d * L2 * L3 * sin(theta3)``) cannot be inverted.
+        """
+        q = np.asarray(angles, dtype=np.float64)
+        J = self.jacobian(q)
+        det = np.linalg.det(J)
+        scale = self.L2 * self.L3 * (self.L1 + self.L2 + self.L3)
+        singular = np.abs(det) < 1e-6 * scale
+        if np.any(singular):
+            i = int(np.flatnonzero(singular)[0])
+            raise SingularConfigurationError(
+                f"leg {self.names[i % len(self.names)]}: joint rates are undefined at angles "
+                f"{np.round(np.degrees(q.reshape(-1, 3)[i]), 2).tolist()} deg "
+                "(leg stretched straight or foot on the coxa axis)"
+            )
+        v = np.asarray(foot_velocities_in_leg, dtype=np.float64)
+        return np.linalg.solve(J, v[..., None])[..., 0]
+
+    # Body-frame conveniences -------------------------------------------------------------
+    def inverse_in_body(self, feet_in_body: npt.ArrayLike, check_limits: bool = True) -> npt.NDArray[np.float64]:
+        """Joint angles, shape (6, 3) [rad], for foot targets in the body frame, shape (6, 3) [m]."""
+        return self.inverse(self.body_to_leg(feet_in_body), check_limits=check_limits)
+
+    def forward_in_body(self, angles: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Foot positions in the body frame, shape (6, 3) [m], from joint angles, shape (6, 3)."""
+        return self.leg_to_body(self.forward(angles))

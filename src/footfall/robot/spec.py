@@ -1,0 +1,271 @@
+"""Robot description of a six-legged walker: body, leg mounts, leg geometry and servos.
+
+A :class:`HexapodSpec` is a frozen value loaded from TOML (see ``robots/default.toml``).
+Angles in the files are in degrees (keys end in ``_deg``); inside the spec everything is SI.
+Legs are listed counter-clockwise seen from above, starting at the front-left leg, so that
+legs ``i``, ``i + 2`` and ``i + 4`` form a tripod (thesis eq. 5.15).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.errors import ConfigError
+
+NUM_LEGS = 6
+BUILTIN_ROBOTS = ("default", "phantomx")
+
+
+def _require(condition: bool, message: str) -> None:
+    if not condition:
+        raise ConfigError(message)
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """Joint ranges of one leg [rad], as ``(lower, upper)`` pairs, in the convention of
+    ``docs/frames.md``: coxa yaw about the leg's z, femur elevation above horizontal,
+    tibia angle relative to the femur's extension (negative bends the foot down)."""
+
+    coxa: tuple[float, float] = (math.radians(-60.0), math.radians(60.0))
+    femur: tuple[float, float] = (math.radians(-90.0), math.radians(90.0))
+    tibia: tuple[float, float] = (math.radians(-160.0), math.radians(0.0))
+
+    def __post_init__(self) -> None:
+        for name in ("coxa", "femur", "tibia"):
+            lower, upper = getattr(self, name)
+            _require(lower < upper, f"joint limits of {name}: lower {lower} must be < upper {upper}")
+
+    @property
+    def lower(self) -> npt.NDArray[np.float64]:
+        """Lower limits, shape (3,) [rad]."""
+        return np.array([self.coxa[0], self.femur[0], self.tibia[0]])
+
+    @property
+    def upper(self) -> npt.NDArray[np.float64]:
+        """Upper limits, shape (3,) [rad]."""
+        return np.array([self.coxa[1], self.femur[1], self.tibia[1]])
+
+
+@dataclass(frozen=True)
+class LegMount:
+    """Where a leg is attached to the body.
+
+    Attributes:
+        name: Short leg name, e.g. ``"LF"`` for left-front.
+        position_in_body: Coxa joint position in the body frame, shape (3,) [m].
+        yaw: Direction the leg points at rest, about the body z axis [rad].
+    """
+
+    name: str
+    position_in_body: tuple[float, float, float]
+    yaw: float
+
+
+@dataclass(frozen=True)
+class ServoGains:
+    """Position servos as the thesis models them: stiff and heavily damped (thesis §3.3).
+
+    Attributes:
+        kp: Position gain [N m / rad].
+        kv: Velocity (damping) gain of the actuator [N m s / rad].
+        max_torque: Saturation torque [N m].
+        armature: Reflected rotor inertia [kg m^2].
+        joint_damping: Passive joint damping [N m s / rad].
+    """
+
+    kp: float = 60.0
+    kv: float = 1.5
+    max_torque: float = 6.0
+    armature: float = 0.005
+    joint_damping: float = 0.2
+
+    def __post_init__(self) -> None:
+        for name in ("kp", "kv", "max_torque"):
+            _require(getattr(self, name) > 0, f"servo {name} must be positive")
+        for name in ("armature", "joint_damping"):
+            _require(getattr(self, name) >= 0, f"servo {name} must be non-negative")
+
+
+@dataclass(frozen=True)
+class HexapodSpec:
+    """A hexapod's geometry, masses and servos.
+
+    Attributes:
+        name: Robot name.
+        body_size: Body box length, width, height [m].
+        body_mass: Body mass [kg], legs excluded.
+        mounts: Six leg mounts, counter-clockwise from the front-left leg.
+        coxa_length: Coxa axis to femur axis [m].
+        femur_length: Femur axis to tibia axis [m].
+        tibia_length: Tibia axis to the foot's contact point [m].
+        segment_masses: Coxa, femur and tibia masses [kg].
+        limits: Joint ranges.
+        servo: Servo model.
+        foot_radius: Radius of the spherical foot [m].
+        foot_friction: Sliding friction coefficient of the foot.
+        stance_radius: Horizontal distance from the coxa axis to the foot at rest [m].
+        body_height: Nominal body height above the ground [m].
+        max_step_height: Highest the foot may lift above the higher end of a swing [m]; the
+            leg's workspace near its rest stance sets it.
+        stride_length: Longest stride the legs allow [m]: the distance a foot travels over
+            the ground in one swing, and the body's advance per gait cycle.
+    """
+
+    name: str
+    body_size: tuple[float, float, float]
+    body_mass: float
+    mounts: tuple[LegMount, ...]
+    coxa_length: float
+    femur_length: float
+    tibia_length: float
+    segment_masses: tuple[float, float, float]
+    limits: JointLimits = field(default_factory=JointLimits)
+    servo: ServoGains = field(default_factory=ServoGains)
+    foot_radius: float = 0.012
+    foot_friction: float = 1.0
+    stance_radius: float = 0.14
+    body_height: float = 0.09
+    max_step_height: float = 0.10
+    stride_length: float = 0.15
+
+    def __post_init__(self) -> None:
+        _require(len(self.mounts) == NUM_LEGS, f"a hexapod has 6 legs, got {len(self.mounts)}")
+        names = [m.name for m in self.mounts]
+        _require(len(set(names)) == NUM_LEGS, f"leg names must be unique, got {names}")
+        for name in ("coxa_length", "femur_length", "tibia_length", "body_mass", "foot_radius"):
+            _require(getattr(self, name) > 0, f"{name} must be positive")
+        _require(all(s > 0 for s in self.body_size), "body_size entries must be positive")
+        _require(all(m > 0 for m in self.segment_masses), "segment masses must be positive")
+        _require(self.stance_radius > self.coxa_length, "stance_radius must exceed coxa_length")
+        _require(self.body_height > 0, "body_height must be positive")
+        _require(self.max_step_height > 0, "max_step_height must be positive")
+        _require(self.stride_length > 0, "stride_length must be positive")
+        angles = np.unwrap([math.atan2(m.position_in_body[1], m.position_in_body[0]) for m in self.mounts])
+        _require(
+            bool(np.all(np.diff(angles) > 0)) and angles[-1] - angles[0] < 2 * math.pi,
+            "legs must be listed counter-clockwise seen from above, starting at the front-left leg",
+        )
+
+    @property
+    def leg_names(self) -> tuple[str, ...]:
+        """Leg names in spec order."""
+        return tuple(m.name for m in self.mounts)
+
+    @property
+    def mount_positions_in_body(self) -> npt.NDArray[np.float64]:
+        """Coxa joint positions in the body frame, shape (6, 3) [m]."""
+        return np.array([m.position_in_body for m in self.mounts], dtype=np.float64)
+
+    @property
+    def mount_yaws(self) -> npt.NDArray[np.float64]:
+        """Leg mount yaw angles, shape (6,) [rad]."""
+        return np.array([m.yaw for m in self.mounts], dtype=np.float64)
+
+    @property
+    def mass(self) -> float:
+        """Total mass [kg]."""
+        return self.body_mass + NUM_LEGS * sum(self.segment_masses)
+
+    def rest_feet_in_body(self, body_height: float | None = None) -> npt.NDArray[np.float64]:
+        """Rest (nominal) foot positions in the body frame, shape (6, 3) [m].
+
+        Args:
+            body_height: Height of the body frame above the ground [m]; the spec's nominal
+                height when omitted.
+        """
+        height = self.body_height if body_height is None else body_height
+        yaws = self.mount_yaws
+        feet = self.mount_positions_in_body.copy()
+        feet[:, 0] += self.stance_radius * np.cos(yaws)
+        feet[:, 1] += self.stance_radius * np.sin(yaws)
+        feet[:, 2] = -height
+        return feet
+
+
+def _pair_deg(table: dict, key: str, default: tuple[float, float]) -> tuple[float, float]:
+    if key not in table:
+        return default
+    lower, upper = table[key]
+    return (math.radians(lower), math.radians(upper))
+
+
+def spec_from_dict(data: dict) -> HexapodSpec:
+    """Build a :class:`HexapodSpec` from the parsed TOML layout (see ``robots/default.toml``).
+
+    Raises:
+        ConfigError: On a missing key or a value outside what is allowed.
+    """
+    try:
+        body = data["body"]
+        leg = data["leg"]
+        limits_table = leg.get("limits_deg", {})
+        defaults = JointLimits()
+        limits = JointLimits(
+            coxa=_pair_deg(limits_table, "coxa", defaults.coxa),
+            femur=_pair_deg(limits_table, "femur", defaults.femur),
+            tibia=_pair_deg(limits_table, "tibia", defaults.tibia),
+        )
+        mounts = tuple(
+            LegMount(
+                name=str(m["name"]),
+                position_in_body=(float(m["x"]), float(m["y"]), float(m.get("z", 0.0))),
+                yaw=math.radians(float(m["yaw_deg"])),
+            )
+            for m in data["mounts"]
+        )
+        stance = data.get("stance", {})
+        foot = data.get("foot", {})
+        return HexapodSpec(
+            name=str(data.get("name", "robot")),
+            body_size=tuple(float(v) for v in body["size"]),  # type: ignore[arg-type]
+            body_mass=float(body["mass"]),
+            mounts=mounts,
+            coxa_length=float(leg["coxa_length"]),
+            femur_length=float(leg["femur_length"]),
+            tibia_length=float(leg["tibia_length"]),
+            segment_masses=tuple(float(v) for v in leg["masses"]),  # type: ignore[arg-type]
+            limits=limits,
+            servo=ServoGains(**data.get("servo", {})),
+            foot_radius=float(foot.get("radius", 0.012)),
+            foot_friction=float(foot.get("friction", 1.0)),
+            stance_radius=float(stance.get("radius", 0.14)),
+            body_height=float(stance.get("body_height", 0.09)),
+            max_step_height=float(stance.get("max_step_height", 0.10)),
+            stride_length=float(stance.get("stride_length", 0.15)),
+        )
+    except KeyError as exc:
+        raise ConfigError(f"robot description is missing the key {exc}") from exc
+    except TypeError as exc:
+        raise ConfigError(f"robot description has a malformed entry: {exc}") from exc
+
+
+def load_spec(name_or_path: str | Path) -> HexapodSpec:
+    """Load a built-in robot (``"default"``, ``"phantomx"``) or a TOML file.
+
+    Raises:
+        ConfigError: When the name is unknown, the file is missing or malformed.
+    """
+    text: str
+    if str(name_or_path) in BUILTIN_ROBOTS:
+        text = resources.files("footfall.robots").joinpath(f"{name_or_path}.toml").read_text()
+    else:
+        path = Path(name_or_path)
+        if not path.is_file():
+            raise ConfigError(
+                f"robot {str(name_or_path)!r} is neither a built-in robot "
+                f"({', '.join(BUILTIN_ROBOTS)}) nor an existing TOML file"
+            )
+        text = path.read_text()
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"robot description {name_or_path}: {exc}") from exc
+    return spec_from_dict(data)

@@ -1,0 +1,99 @@
+"""The simulated hexapod: a MuJoCo model behind the :class:`HexapodBackend` interface."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering unless the user chose a backend
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+import numpy.typing as npt  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
+
+from footfall.backend import RobotState  # noqa: E402
+from footfall.motion.kinematics import LegKinematics  # noqa: E402
+from footfall.motion.walker import JointTargets  # noqa: E402
+from footfall.robot.spec import HexapodSpec  # noqa: E402
+from footfall.sim.model import hexapod_mjcf, joint_names  # noqa: E402
+
+
+class MujocoHexapod:
+    """A hexapod simulated in MuJoCo, standing on its rest stance at start.
+
+    Args:
+        spec: The robot.
+        terrain_xml: Extra world geoms (see :func:`footfall.sim.model.hexapod_mjcf`).
+        body_height: Initial body height above the ground [m]; the spec's by default.
+    """
+
+    def __init__(self, spec: HexapodSpec, terrain_xml: str = "", body_height: float | None = None) -> None:
+        self.spec = spec
+        height = spec.body_height if body_height is None else body_height
+        self.xml = hexapod_mjcf(spec, terrain_xml, initial_height=height)
+        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        self.data = mujoco.MjData(self.model)
+        names = joint_names(spec)
+        self._qpos_index = np.array([self.model.joint(n).qposadr[0] for n in names])
+        self._qvel_index = np.array([self.model.joint(n).dofadr[0] for n in names])
+        self._foot_sites = np.array([self.model.site(f"{n}_foot").id for n in spec.leg_names])
+        self._touch = [self.model.sensor(f"{n}_touch") for n in spec.leg_names]
+        self._quat = self.model.sensor("imu_quat")
+        self._gyro = self.model.sensor("imu_gyro")
+        self._torso = self.model.body("torso").id
+        servo = spec.servo
+        self._feedforward_gain = servo.kv / servo.kp
+        kinematics = LegKinematics(spec)
+        feet = spec.rest_feet_in_body(height)
+        feet[:, 2] += spec.foot_radius
+        angles = kinematics.inverse_in_body(feet)
+        self.data.qpos[self._qpos_index] = angles.ravel()
+        self.data.ctrl[:] = angles.ravel()
+        mujoco.mj_forward(self.model, self.data)
+
+    @property
+    def timestep(self) -> float:
+        """Physics time step [s]."""
+        return float(self.model.opt.timestep)
+
+    def read(self) -> RobotState:
+        """Joint encoders, IMU attitude and gyro, and the simulator's ground truth."""
+        d = self.data
+        w, x, y, z = d.sensordata[self._quat.adr[0] : self._quat.adr[0] + 4]
+        touch = np.array([d.sensordata[s.adr[0]] for s in self._touch])
+        return RobotState(
+            time=float(d.time),
+            joint_positions=d.qpos[self._qpos_index].reshape(6, 3).copy(),
+            joint_velocities=d.qvel[self._qvel_index].reshape(6, 3).copy(),
+            orientation_body_in_world=Rotation.from_quat([x, y, z, w]),
+            angular_velocity_body_in_body=d.sensordata[self._gyro.adr[0] : self._gyro.adr[0] + 3].copy(),
+            position_body_in_world=d.xpos[self._torso].copy(),
+            feet_in_world=d.site_xpos[self._foot_sites].copy(),
+            feet_in_contact=touch > 1e-6,
+        )
+
+    def command(self, targets: JointTargets) -> None:
+        """Set the servo targets; the rate feed-forward cancels the servo damping's lag."""
+        ctrl = targets.positions + self._feedforward_gain * targets.velocities
+        self.data.ctrl[:] = ctrl.ravel()
+
+    def advance(self, duration: float) -> None:
+        """Step the physics for ``duration`` seconds (rounded to whole time steps)."""
+        steps = max(1, round(duration / self.timestep))
+        mujoco.mj_step(self.model, self.data, nstep=steps)
+
+    def warnings(self) -> dict[str, int]:
+        """MuJoCo warnings raised so far, by name (empty when the simulation is healthy)."""
+        return {
+            mujoco.mjtWarning(i).name: int(w.number)
+            for i, w in enumerate(self.data.warning)
+            if w.number > 0
+        }
+
+    def body_height_above(self, ground_height: float = 0.0) -> float:
+        """Body frame height above a ground level [m] (ground truth)."""
+        return float(self.data.xpos[self._torso][2] - ground_height)
+
+    def feet_in_world(self) -> npt.NDArray[np.float64]:
+        """Foot centres in the world, shape (6, 3) [m] (ground truth)."""
+        return self.data.site_xpos[self._foot_sites].copy()
