@@ -31,6 +31,8 @@ class RobotState:
             (a simulator's ground truth, a motion-capture system); else None.
         feet_in_world: Foot centres, shape (6, 3) [m], when known; else None.
         feet_in_contact: Which feet touch the ground, shape (6,), when known; else None.
+        foot_orientations_in_world: Rotation matrices of the feet (tibia frames), shape
+            (6, 3, 3), when known; else None. With them, rolling can be told from sliding.
     """
 
     time: float
@@ -41,6 +43,7 @@ class RobotState:
     position_body_in_world: npt.NDArray[np.float64] | None = None
     feet_in_world: npt.NDArray[np.float64] | None = None
     feet_in_contact: npt.NDArray[np.bool_] | None = None
+    foot_orientations_in_world: npt.NDArray[np.float64] | None = None
 
     @property
     def roll_pitch(self) -> tuple[float, float]:

@@ -11,7 +11,8 @@ the foot down)::
     z = L2 sin(theta2) + L3 sin(theta2 + theta3)
 
 Inverse kinematics picks the knee-up branch (``theta3 <= 0``), the posture of the thesis'
-robot. Arrays are vectorised over legs: a leading axis of length 6 follows spec order.
+robot, and assumes the foot is out from the coxa axis (``d > 0``): a foot behind the coxa
+axis is reached by turning the coxa half a turn instead. Arrays are vectorised over legs: a leading axis of length 6 follows spec order.
 """
 
 from __future__ import annotations
@@ -138,6 +139,7 @@ class LegKinematics:
         cos_knee = np.clip((c_sq - self.L2**2 - self.L3**2) / (2.0 * self.L2 * self.L3), -1.0, 1.0)
         t3 = -np.arccos(cos_knee)
         t2 = np.arctan2(z, r) - np.arctan2(self.L3 * np.sin(t3), self.L2 + self.L3 * np.cos(t3))
+        t2 = np.mod(t2 + np.pi, 2.0 * np.pi) - np.pi  # into [-pi, pi)
         t1 = np.arctan2(y, x)
         angles = np.stack([t1, t2, t3], axis=-1)
         if check_limits:

@@ -51,6 +51,14 @@ class PlanarPose:
         v[..., 0], v[..., 1] = x, y
         return v
 
+    def vectors_to_world(self, vectors_in_body: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Rotate free vectors, shape (n, 2) or (n, 3), from the body's frame into the world."""
+        v = np.array(vectors_in_body, dtype=np.float64)
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        x, y = c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]
+        v[..., 0], v[..., 1] = x, y
+        return v
+
     def moved(self, velocity_in_body: tuple[float, float], yaw_rate: float, dt: float) -> PlanarPose:
         """The pose after moving ``dt`` seconds with a constant twist given in the body frame.
 

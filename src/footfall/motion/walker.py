@@ -7,6 +7,11 @@ mid-stance (thesis §5.3.4, eqs. 5.17-5.20, implemented for their intent). The g
 plane ``z = 0`` of that frame (a blind walker); foot positions are foot-sphere centres, one
 foot radius above the ground when down.
 
+A round foot rolls as its tibia tilts during stance: holding the sphere's centre still
+would make it slide by ``r * dpsi`` (``psi`` the tibia's pitch). So the controller keeps the
+*contact point* still instead, moving the commanded centre by the rolling displacement
+``-r * (psi - psi_touchdown)`` along the leg's horizontal direction.
+
 The gait state machine is the thesis' (Table 5.1): ``REST`` holds every foot down; it
 enters ``STEPPING`` when the command asks for motion or a foot is off its rest position,
 and returns to ``REST`` once every foot is back. A target no leg can reach does not throw
@@ -99,6 +104,8 @@ class WalkController:
         self._yaw_rate = 0.0
         self._velocity_scale = 1.0
         self._last_walk_direction = np.array([1.0, 0.0])
+        self._rolling_in_world = np.zeros((6, 3))  # rolling displacement of stance feet [m]
+        self._tibia_pitch_at_touchdown = np.full(6, np.nan)  # psi when the foot came down [rad]
         self._last_targets = self._solve(np.zeros((6, 3)), 0.0, 0.0)
 
     # Public ------------------------------------------------------------------------------
@@ -132,8 +139,15 @@ class WalkController:
         self._last_targets = targets
         return targets
 
+    @property
+    def feet_commanded_in_world(self) -> npt.NDArray[np.float64]:
+        """Commanded foot-sphere centres in the world, rolling of stance feet included,
+        shape (6, 3) [m]."""
+        return self.feet_in_world + self._rolling_in_world
+
     def feet_in_body(self) -> npt.NDArray[np.float64]:
-        """Commanded foot positions in the (reference) body frame, shape (6, 3) [m]."""
+        """Foot positions (stance contact anchors, swing positions) in the reference body
+        frame, shape (6, 3) [m]."""
         feet = self.pose.points_to_body(self.feet_in_world)
         feet[:, 2] -= self.height
         return feet
@@ -217,6 +231,7 @@ class WalkController:
         if self.state is GaitState.STEPPING and t >= self.step_start + self.step_duration - 1e-9:
             for leg, swing in self.swings.items():
                 self.feet_in_world[leg] = swing.target
+                self._tibia_pitch_at_touchdown[leg] = np.nan
             self.swings = {}
             self.swinging[:] = False
             self.steps_taken += 1
@@ -274,7 +289,9 @@ class WalkController:
         targets = self._swing_targets(n)
         self.swings = {}
         for leg in np.flatnonzero(swing):
-            start = self.feet_in_world[leg].copy()
+            start = self.feet_commanded_in_world[leg].copy()
+            self.feet_in_world[leg] = start
+            self._rolling_in_world[leg] = 0.0
             if self.config.swing == "flow":
                 self.swings[int(leg)] = FlowSwing(start, targets[leg], self.step_duration, self.config.flow)
             else:
@@ -309,9 +326,26 @@ class WalkController:
         return velocity
 
     # Kinematics ---------------------------------------------------------------------------
-    def _solve(self, swing_velocity_in_world: npt.NDArray[np.float64], scale: float, yaw_rate: float) -> JointTargets:
-        feet = self.feet_in_body()
+    def _solve(
+        self, swing_velocity_in_world: npt.NDArray[np.float64], scale: float, yaw_rate: float
+    ) -> JointTargets:
+        anchors = self.feet_in_body()
+        feet = anchors
         angles = self.kinematics.inverse_in_body(feet)
+        stance = ~self.swinging
+        pitch = angles[:, 1] + angles[:, 2]
+        new = stance & np.isnan(self._tibia_pitch_at_touchdown)
+        self._tibia_pitch_at_touchdown[new] = pitch[new]
+        rolling_in_body = np.zeros((6, 3))
+        for _ in range(2):  # fixed point: the rolling moves the foot, which changes psi
+            roll = -self.spec.foot_radius * (pitch - self._tibia_pitch_at_touchdown)
+            radial = np.stack([np.cos(angles[:, 0]), np.sin(angles[:, 0]), np.zeros(6)], axis=1)
+            rolling_in_leg = np.where(stance[:, None], roll[:, None] * radial, 0.0)
+            rolling_in_body = self.kinematics.leg_to_body(rolling_in_leg) - self.kinematics.mounts_in_body
+            feet = anchors + rolling_in_body
+            angles = self.kinematics.inverse_in_body(feet)
+            pitch = angles[:, 1] + angles[:, 2]
+        self._rolling_in_world = self.pose.vectors_to_world(rolling_in_body)
         vx, vy = self._velocity[0] * scale, self._velocity[1] * scale
         # Velocity of each foot in the body frame: its own world velocity, minus the body's
         # motion (translation and rotation about z).

@@ -70,6 +70,7 @@ class MujocoHexapod:
             position_body_in_world=d.xpos[self._torso].copy(),
             feet_in_world=d.site_xpos[self._foot_sites].copy(),
             feet_in_contact=touch > 1e-6,
+            foot_orientations_in_world=d.site_xmat[self._foot_sites].reshape(6, 3, 3).copy(),
         )
 
     def command(self, targets: JointTargets) -> None:

@@ -1,0 +1,167 @@
+"""Walking metrics computed from a :class:`~footfall.control_loop.WalkLog`.
+
+Names carry their units; the keys of :func:`walk_metrics` are the ``metrics.json`` interface.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.control_loop import WalkLog
+
+# The robot has fallen when its body tilts more than this [deg] or sinks below this fraction
+# of the commanded height.
+FALL_TILT_DEG = 30.0
+FALL_HEIGHT_FRACTION = 0.4
+# Oscillation is measured after the start-up transient [s] (thesis Fig. 8.2 style).
+TRANSIENT_SECONDS = 2.0
+
+GroundHeight = Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], npt.NDArray[np.float64]]
+
+
+def flat_ground(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """Ground height of a flat floor at z = 0 [m]."""
+    return np.zeros(np.broadcast(x, y).shape)
+
+
+@dataclass(frozen=True)
+class StancePhase:
+    """One stance of one leg between touchdown and lift-off.
+
+    Attributes:
+        leg: Leg index.
+        start: Index of the first tick of the stance.
+        end: Index of the last tick of the stance.
+    """
+
+    leg: int
+    start: int
+    end: int
+
+
+def stance_phases(swinging: npt.NDArray[np.bool_]) -> list[StancePhase]:
+    """Stances that begin with a touchdown and end with a lift-off.
+
+    Args:
+        swinging: Shape (ticks, 6).
+    """
+    phases = []
+    for leg in range(swinging.shape[1]):
+        s = swinging[:, leg].astype(np.int8)
+        touchdowns = np.flatnonzero(np.diff(s) == -1) + 1
+        liftoffs = np.flatnonzero(np.diff(s) == 1)
+        for start in touchdowns:
+            later = liftoffs[liftoffs > start]
+            if later.size:
+                phases.append(StancePhase(leg, int(start), int(later[0])))
+    return phases
+
+
+def stance_slip_m(log: WalkLog, foot_radius: float) -> npt.NDArray[np.float64]:
+    """How far each foot slid over the ground in each of its stances [m], shape (stances,).
+
+    A round foot may roll; rolling is not slip. So the slip is the horizontal displacement,
+    between the tick after touchdown (once the impact has settled) and lift-off, of the
+    material point of the foot that touched the ground: it stays put when the foot rolls
+    (to third order in the roll angle) and moves with any sliding. Without foot orientations
+    in the log, the foot centre's displacement is used.
+    """
+    feet = log.array("feet_in_world")
+    rotations = log.array("foot_orientations_in_world")
+    down = np.array([0.0, 0.0, -foot_radius])
+    slips = []
+    for p in stance_phases(log.array("swinging")):
+        s, e = min(p.start + 1, p.end), p.end
+        if np.isnan(rotations[s, p.leg]).any():
+            moved = feet[e, p.leg] - feet[s, p.leg]
+        else:
+            material = rotations[s, p.leg].T @ down  # contact point in the foot's own frame
+            moved = (feet[e, p.leg] + rotations[e, p.leg] @ material) - (feet[s, p.leg] + down)
+        slips.append(float(np.hypot(moved[0], moved[1])))
+    return np.asarray(slips)
+
+
+def swing_apexes_m(log: WalkLog, foot_radius: float, ground: GroundHeight = flat_ground) -> npt.NDArray[np.float64]:
+    """Highest clearance of the foot's underside above the ground in each swing [m]."""
+    swinging = log.array("swinging")
+    feet = log.array("feet_in_world")
+    apexes = []
+    for leg in range(swinging.shape[1]):
+        s = swinging[:, leg].astype(np.int8)
+        starts = np.flatnonzero(np.diff(s) == 1) + 1
+        ends = np.flatnonzero(np.diff(s) == -1)
+        for start in starts:
+            later = ends[ends >= start]
+            if later.size:
+                f = feet[start : later[0] + 1, leg]
+                clearance = f[:, 2] - foot_radius - ground(f[:, 0], f[:, 1])
+                apexes.append(float(clearance.max()))
+    return np.asarray(apexes)
+
+
+def walk_metrics(
+    log: WalkLog,
+    commanded_speed_mps: float,
+    wall_seconds: float,
+    foot_radius: float,
+    ground: GroundHeight = flat_ground,
+    frozen_reason: str = "",
+) -> dict[str, object]:
+    """Summary metrics of a walk.
+
+    Args:
+        log: The record of the walk.
+        commanded_speed_mps: Commanded body speed [m/s].
+        wall_seconds: Wall-clock time the walk took [s].
+        foot_radius: Radius of the feet [m].
+        ground: Ground height under a point.
+        frozen_reason: Why the controller froze, empty if it did not.
+
+    Returns:
+        The ``metrics.json`` content: ``distance_m``, ``mean_speed_mps``,
+        ``commanded_speed_mps``, ``fell``, ``body_height_error_mean_m`` (measured minus
+        commanded, so a sagging body is negative), ``body_height_oscillation_ratio``
+        (peak-to-peak height after the first 2 s over the commanded height),
+        ``tilt_max_deg``, ``tilt_rms_deg``, ``sim_seconds``, ``wall_seconds``,
+        ``realtime_factor``, and more.
+    """
+    t = log.array("time")
+    body = log.array("body_position_in_world")
+    tilt_deg = np.degrees(log.array("tilt"))
+    commanded = log.array("commanded_height")
+    height = body[:, 2] - ground(body[:, 0], body[:, 1])
+    sim_seconds = float(t[-1]) if t.size else 0.0
+    start = body[0] if body.size else np.zeros(3)
+    distance = float(np.hypot(*(body[-1, :2] - start[:2]))) if body.size else 0.0
+    steady = t > TRANSIENT_SECONDS
+    if not steady.any():
+        steady = np.ones_like(t, dtype=bool)
+    fell = bool(np.any(tilt_deg > FALL_TILT_DEG) or np.any(height < FALL_HEIGHT_FRACTION * commanded))
+    slips = stance_slip_m(log, foot_radius)
+    apexes = swing_apexes_m(log, foot_radius, ground)
+    swinging = log.array("swinging")
+    return {
+        "distance_m": distance,
+        "mean_speed_mps": distance / sim_seconds if sim_seconds > 0 else 0.0,
+        "commanded_speed_mps": float(commanded_speed_mps),
+        "fell": fell,
+        "body_height_error_mean_m": float(np.mean(height - commanded)),
+        "body_height_oscillation_ratio": float(np.ptp(height[steady]) / np.mean(commanded[steady])),
+        "tilt_max_deg": float(tilt_deg.max()),
+        "tilt_rms_deg": float(np.sqrt(np.mean(tilt_deg**2))),
+        "roll_max_deg": float(np.degrees(np.abs(log.array("roll")).max())),
+        "pitch_max_deg": float(np.degrees(np.abs(log.array("pitch")).max())),
+        "steps": int(np.count_nonzero(np.diff(swinging.astype(np.int8), axis=0) == 1)),
+        "stance_slip_max_m": float(slips.max()) if slips.size else 0.0,
+        "stance_slip_mean_m": float(slips.mean()) if slips.size else 0.0,
+        "swing_apex_median_m": float(np.median(apexes)) if apexes.size else 0.0,
+        "frozen": bool(frozen_reason),
+        "frozen_reason": frozen_reason,
+        "sim_seconds": sim_seconds,
+        "wall_seconds": float(wall_seconds),
+        "realtime_factor": sim_seconds / wall_seconds if wall_seconds > 0 else float("inf"),
+    }

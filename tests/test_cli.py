@@ -1,0 +1,62 @@
+"""The footfall command line."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from footfall.cli import build_parser, main
+
+WALK_KEYS = {
+    "distance_m", "mean_speed_mps", "commanded_speed_mps", "fell", "body_height_error_mean_m",
+    "body_height_oscillation_ratio", "tilt_max_deg", "tilt_rms_deg", "sim_seconds",
+    "wall_seconds", "realtime_factor",
+}
+
+
+def test_walk_writes_metrics_and_plot(tmp_path, capsys):
+    """`footfall walk` writes metrics.json with the interface keys, and walk.png."""
+    out = tmp_path / "walk"
+    code = main(["walk", "--seconds", "2", "--gait", "ripple", "--seed", "3", "--out", str(out)])
+    assert code == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert WALK_KEYS <= metrics.keys()
+    assert metrics["gait"] == "ripple" and metrics["seed"] == 3
+    assert metrics["sim_seconds"] == pytest.approx(2.0)
+    assert (out / "walk.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    printed = capsys.readouterr().out
+    assert "walk summary" in printed and str(out / "metrics.json") in printed
+
+
+def test_walk_with_a_robot_file(tmp_path):
+    """--robot accepts a TOML file."""
+    from pathlib import Path
+
+    source = Path(__file__).parents[1] / "src/footfall/robots/phantomx.toml"
+    robot = tmp_path / "mine.toml"
+    robot.write_text(source.read_text())
+    assert main(["walk", "--seconds", "1", "--robot", str(robot), "--out", str(tmp_path / "o")]) == 0
+
+
+def test_too_fast_is_a_clear_error(tmp_path, capsys):
+    """A speed above the gait's top speed is refused, naming the limit."""
+    code = main(["walk", "--gait", "wave", "--speed", "0.5", "--out", str(tmp_path)])
+    assert code == 2
+    assert "top speed" in capsys.readouterr().out
+
+
+def test_unknown_robot_is_a_clear_error(tmp_path, capsys):
+    """An unknown robot name lists the built-in robots."""
+    assert main(["walk", "--robot", "spider", "--out", str(tmp_path)]) == 2
+    assert "phantomx" in capsys.readouterr().out
+
+
+def test_help_explains_every_walk_option():
+    """`footfall walk --help` documents each option of the interface."""
+    parser = build_parser()
+    walk = parser._subparsers._group_actions[0].choices["walk"]
+    help_text = walk.format_help()
+    for option in ("--terrain", "--seconds", "--speed", "--gait", "--robot", "--seed", "--out"):
+        assert option in help_text
+    assert all(action.help for action in walk._actions)

@@ -1,0 +1,115 @@
+"""The walking controller without a simulator: gait sequencing, targets and safety."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from footfall.motion.gait import GaitConfig, GaitKind, WalkCommand
+from footfall.motion.walker import GaitState, WalkController
+
+DT = 0.01
+
+
+def drive(controller: WalkController, command: WalkCommand, seconds: float, t0: float = 0.0):
+    """Run the controller alone; yields (t, targets) per tick."""
+    for k in range(round(seconds / DT)):
+        t = t0 + k * DT
+        yield t, controller.update(t, command)
+
+
+def test_standing_still_is_rest(default_spec):
+    """With no motion commanded the robot rests on its rest stance."""
+    controller = WalkController(default_spec)
+    for _ in drive(controller, WalkCommand(speed=0.0), 1.0):
+        assert controller.state is GaitState.REST
+    np.testing.assert_allclose(controller.feet_in_body()[:, :2], default_spec.rest_feet_in_body()[:, :2])
+
+
+@pytest.mark.parametrize("kind", list(GaitKind))
+def test_supporting_feet_stay_fixed_in_the_world(default_spec, kind):
+    """Eqs. 5.17-5.18: a foot in stance does not move in the world while the body walks."""
+    controller = WalkController(default_spec, GaitConfig(kind=kind))
+    previous = controller.feet_in_world.copy()
+    was_swinging = controller.swinging.copy()
+    for _ in drive(controller, WalkCommand(speed=0.05, yaw_rate=0.1), 6.0):
+        stance = ~controller.swinging & ~was_swinging
+        np.testing.assert_allclose(controller.feet_in_world[stance], previous[stance], atol=1e-12)
+        previous = controller.feet_in_world.copy()
+        was_swinging = controller.swinging.copy()
+
+
+def test_tripod_supports_on_three_feet_and_alternates(default_spec):
+    """Tripod: three feet swing at every instant of stepping and the two sets alternate."""
+    controller = WalkController(default_spec, GaitConfig(kind="tripod"))
+    sets = []
+    for t, _ in drive(controller, WalkCommand(speed=0.1), 8.0):
+        if t == 0.0:
+            continue  # the first tick only sets the clock
+        assert controller.state is GaitState.STEPPING
+        assert controller.swinging.sum() == 3
+        current = tuple(np.flatnonzero(controller.swinging))
+        if not sets or sets[-1] != current:
+            sets.append(current)
+    assert len(sets) > 8
+    assert all(a != b for a, b in zip(sets, sets[1:], strict=False))
+    assert set(sets) == {(0, 2, 4), (1, 3, 5)}
+
+
+@pytest.mark.parametrize("kind", list(GaitKind))
+def test_feet_touch_down_on_their_targets_and_ground(default_spec, kind):
+    """At every touchdown the foot is on the ground, where its swing was aimed."""
+    controller = WalkController(default_spec, GaitConfig(kind=kind))
+    targets = {}
+    touchdowns = 0
+    was_swinging = controller.swinging.copy()
+    for _ in drive(controller, WalkCommand(speed=0.04), 8.0):
+        for leg in np.flatnonzero(was_swinging & ~controller.swinging):
+            np.testing.assert_allclose(controller.feet_in_world[leg], targets[leg], atol=1e-9)
+            assert controller.feet_in_world[leg, 2] == pytest.approx(default_spec.foot_radius)
+            touchdowns += 1
+        targets = {int(leg): s.target for leg, s in controller.swings.items()}
+        was_swinging = controller.swinging.copy()
+    assert touchdowns >= 6
+
+
+def test_reference_body_moves_at_the_commanded_speed(default_spec):
+    """In steady walking the reference body advances at the commanded speed."""
+    controller = WalkController(default_spec)
+    command = WalkCommand(speed=0.1)
+    list(drive(controller, command, 4.0))
+    x0 = controller.pose.x
+    list(drive(controller, command, 6.0, t0=4.0))
+    assert (controller.pose.x - x0) / 6.0 == pytest.approx(0.1, rel=0.02)
+
+
+def test_stops_and_returns_to_rest(default_spec):
+    """When the command goes to zero the robot steps its feet home and rests."""
+    controller = WalkController(default_spec)
+    list(drive(controller, WalkCommand(speed=0.1), 3.0))
+    list(drive(controller, WalkCommand(speed=0.0), 5.0, t0=3.0))
+    assert controller.state is GaitState.REST
+    rest = default_spec.rest_feet_in_body()[:, :2]
+    np.testing.assert_allclose(controller.feet_in_body()[:, :2], rest, atol=default_spec.foot_radius)
+
+
+def test_unreachable_command_freezes_with_the_leg_named(default_spec):
+    """A body height no leg reaches freezes the robot, holding its last safe joint targets."""
+    controller = WalkController(default_spec)
+    held = None
+    for _t, targets in drive(controller, WalkCommand(speed=0.0, body_height=0.5), 10.0):
+        if controller.state is GaitState.FROZEN:
+            held = held if held is not None else targets.positions.copy()
+            np.testing.assert_array_equal(targets.positions, held)
+    assert controller.state is GaitState.FROZEN
+    assert "out of reach" in controller.frozen_reason
+    assert any(name in controller.frozen_reason for name in default_spec.leg_names)
+    # The held targets are a pose the legs can actually take.
+    controller.kinematics.check_limits(held)
+
+
+def test_speed_above_the_gait_maximum_is_capped(default_spec):
+    """The controller never walks faster than its gait allows."""
+    controller = WalkController(default_spec, GaitConfig(kind="wave"))
+    list(drive(controller, WalkCommand(speed=1.0), 5.0))
+    assert np.hypot(*controller.body_velocity_in_body) <= controller.config.max_speed + 1e-9
