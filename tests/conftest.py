@@ -8,7 +8,7 @@ import pytest
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-from footfall.robot.spec import HexapodSpec, load_spec  # noqa: E402
+from footfall.robot.spec import HexapodSpec, load_spec
 
 
 @pytest.fixture(scope="session")

@@ -9,9 +9,17 @@ import pytest
 from footfall.cli import build_parser, main
 
 WALK_KEYS = {
-    "distance_m", "mean_speed_mps", "commanded_speed_mps", "fell", "body_height_error_mean_m",
-    "body_height_oscillation_ratio", "tilt_max_deg", "tilt_rms_deg", "sim_seconds",
-    "wall_seconds", "realtime_factor",
+    "distance_m",
+    "mean_speed_mps",
+    "commanded_speed_mps",
+    "fell",
+    "body_height_error_mean_m",
+    "body_height_oscillation_ratio",
+    "tilt_max_deg",
+    "tilt_rms_deg",
+    "sim_seconds",
+    "wall_seconds",
+    "realtime_factor",
 }
 
 
@@ -36,7 +44,9 @@ def test_walk_with_a_robot_file(tmp_path):
     source = Path(__file__).parents[1] / "src/footfall/robots/phantomx.toml"
     robot = tmp_path / "mine.toml"
     robot.write_text(source.read_text())
-    assert main(["walk", "--seconds", "1", "--robot", str(robot), "--out", str(tmp_path / "o")]) == 0
+    assert (
+        main(["walk", "--seconds", "1", "--robot", str(robot), "--out", str(tmp_path / "o")]) == 0
+    )
 
 
 def test_too_fast_is_a_clear_error(tmp_path, capsys):

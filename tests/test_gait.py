@@ -77,7 +77,7 @@ def test_step_duration_keeps_speed_and_bounds(kind, fraction):
 
 
 def test_top_speed_follows_eq_5_14():
-    """v = S / (D tau) with the body-frame stroke D*S: the tripod's top speed."""
+    """V = S / (D tau) with the body-frame stroke D*S: the tripod's top speed."""
     config = GaitConfig(kind="tripod", min_step_duration=0.3).for_robot(0.15, 0.1)
     tau = 2 * 0.3
     stroke = config.duty_factor * 0.15
@@ -94,7 +94,9 @@ def test_command_validation():
         WalkCommand(direction=(0.0, 0.0), speed=0.1)
     with pytest.raises(ConfigError, match="body height"):
         WalkCommand(body_height=0.0)
-    assert WalkCommand(direction=(3.0, 4.0), speed=0.5).velocity_in_body == pytest.approx((0.3, 0.4))
+    assert WalkCommand(direction=(3.0, 4.0), speed=0.5).velocity_in_body == pytest.approx(
+        (0.3, 0.4)
+    )
 
 
 def test_unknown_gait_is_rejected():

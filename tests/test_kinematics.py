@@ -16,8 +16,10 @@ KINEMATICS = {name: LegKinematics(spec) for name, spec in SPECS.items()}
 
 
 def _leg_angles(kin: LegKinematics, margin: float = 0.02) -> st.SearchStrategy[np.ndarray]:
-    """One leg's joint angles inside the limits, knee bent by at least ``margin`` rad, with
-    the foot out from the coxa axis (the workspace of a hexapod leg, ``d > 0``)."""
+    """One leg's joint angles in the workspace of a hexapod leg.
+
+    Inside the limits, knee bent by at least ``margin`` rad, foot out from the coxa axis.
+    """
     lower, upper = kin.lower + margin, kin.upper - margin
     upper[2] = min(upper[2], -margin)  # knee-up branch: theta3 < 0
 
@@ -62,8 +64,12 @@ def test_body_frame_round_trip(case):
     """Targets given in the body frame go through body -> leg -> IK -> FK -> body unchanged."""
     kin, angles = case
     feet_in_body = kin.forward_in_body(angles)
-    np.testing.assert_allclose(kin.forward_in_body(kin.inverse_in_body(feet_in_body)), feet_in_body, atol=1e-9)
-    np.testing.assert_allclose(kin.leg_to_body(kin.body_to_leg(feet_in_body)), feet_in_body, atol=1e-12)
+    np.testing.assert_allclose(
+        kin.forward_in_body(kin.inverse_in_body(feet_in_body)), feet_in_body, atol=1e-9
+    )
+    np.testing.assert_allclose(
+        kin.leg_to_body(kin.body_to_leg(feet_in_body)), feet_in_body, atol=1e-12
+    )
 
 
 @given(robot_and_angles(), st.lists(st.floats(-1.0, 1.0), min_size=18, max_size=18))
@@ -95,8 +101,13 @@ def test_joint_rates_reproduce_the_foot_velocity(case, rates):
     np.testing.assert_allclose(kin.joint_rates(angles, foot_velocity), q_dot, atol=1e-4)
 
 
-@given(st.sampled_from(sorted(SPECS)), st.integers(0, 5), st.floats(0.001, 0.5),
-       st.floats(-np.pi, np.pi), st.floats(-np.pi / 2, np.pi / 2))
+@given(
+    st.sampled_from(sorted(SPECS)),
+    st.integers(0, 5),
+    st.floats(0.001, 0.5),
+    st.floats(-np.pi, np.pi),
+    st.floats(-np.pi / 2, np.pi / 2),
+)
 @settings(max_examples=200, deadline=None)
 def test_out_of_reach_targets_raise_with_leg_and_excess(name, leg, excess, azimuth, elevation):
     """A target beyond the stretched leg raises UnreachableTargetError naming leg and excess."""

@@ -52,4 +52,6 @@ def test_simulator_and_library_agree_on_forward_kinematics(name, unit):
     data.qpos[sim._qpos_index] = angles.ravel()
     mujoco.mj_kinematics(sim.model, data)
     feet_in_world = data.site_xpos[sim._foot_sites]
-    np.testing.assert_allclose(feet_in_world - [0.0, 0.0, 1.0], kin.forward_in_body(angles), atol=1e-9)
+    np.testing.assert_allclose(
+        feet_in_world - [0.0, 0.0, 1.0], kin.forward_in_body(angles), atol=1e-9
+    )

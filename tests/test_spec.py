@@ -12,7 +12,9 @@ import pytest
 from footfall.errors import ConfigError
 from footfall.robot.spec import load_spec
 
-PHANTOMX_URDF = Path(__file__).parents[2] / "shared/data/robots/phantomx_mark4/urdf/pxmark4.urdf.xacro"
+PHANTOMX_URDF = (
+    Path(__file__).parents[2] / "shared/data/robots/phantomx_mark4/urdf/pxmark4.urdf.xacro"
+)
 
 
 def test_builtin_robots_load(any_spec):
@@ -50,7 +52,9 @@ def test_rest_feet_lie_on_mount_yaw_at_stance_radius(any_spec):
     feet = any_spec.rest_feet_in_body()
     offset = feet[:, :2] - any_spec.mount_positions_in_body[:, :2]
     np.testing.assert_allclose(np.hypot(offset[:, 0], offset[:, 1]), any_spec.stance_radius)
-    np.testing.assert_allclose(np.arctan2(offset[:, 1], offset[:, 0]), any_spec.mount_yaws, atol=1e-12)
+    np.testing.assert_allclose(
+        np.arctan2(offset[:, 1], offset[:, 0]), any_spec.mount_yaws, atol=1e-12
+    )
     np.testing.assert_allclose(feet[:, 2], -any_spec.body_height)
 
 
@@ -94,5 +98,5 @@ def test_bad_toml_syntax_is_reported(tmp_path):
     """A file that is not TOML gives a ConfigError naming the file."""
     path = tmp_path / "broken.toml"
     path.write_text("name = \n")
-    with pytest.raises(ConfigError, match="broken.toml"):
+    with pytest.raises(ConfigError, match=r"broken\.toml"):
         load_spec(path)

@@ -45,7 +45,9 @@ def test_flow_reaches_the_target(dz):
     np.testing.assert_allclose(swing.position(0.6), target, atol=1e-12)
     np.testing.assert_allclose(swing.position(0.0), [0.0, 0.02, 0.0], atol=1e-12)
     path = sampled(swing)
-    assert np.all(np.diff(np.linalg.norm(path[:, :2] - target[:2], axis=1)) <= 1e-9), "never backs away"
+    assert np.all(np.diff(np.linalg.norm(path[:, :2] - target[:2], axis=1)) <= 1e-9), (
+        "never backs away"
+    )
 
 
 def test_flow_rises_vertically_before_a_higher_target():
@@ -89,8 +91,11 @@ def test_lowered_target_gives_a_lower_arc():
 
 @pytest.mark.parametrize("fraction", [0.5, 0.6, 0.7, 0.8])
 def test_target_moved_mid_swing_is_reached_without_a_second_rise(fraction):
-    """Fig. 5.18: a target moved farther and lower mid-swing is reached, and the foot does
-    not climb again once it has started down; the polynomial arc, refitted, climbs again."""
+    """Fig. 5.18: a target moved farther and lower mid-swing is reached without a second rise.
+
+    Once the foot has started down it climbs again only a little; the polynomial arc,
+    refitted from the same point, climbs a full step again.
+    """
     new_target = np.array([0.20, 0.0, -0.03])
     flow = FlowSwing([0.0, 0.0, 0.0], [STRIDE, 0.0, 0.0], 1.0, THESIS)
     before = sampled(flow, 0.0, 200)[:, 2]
@@ -108,8 +113,10 @@ def test_target_moved_mid_swing_is_reached_without_a_second_rise(fraction):
 
 
 def test_target_moved_up_and_closer_needs_no_new_vertical_rise():
-    """Fig. 5.19: after a lowered start, a target moved up and closer is reached from above,
-    with no fresh vertical rise (the foot is already above it)."""
+    """Fig. 5.19: a target moved up and closer is reached with no fresh vertical rise.
+
+    The swing started above its first target, so the foot is already above the new one.
+    """
     flow = FlowSwing([0.0, 0.0, 0.05], [STRIDE, 0.0, 0.0], 1.0, THESIS)
     t = 0.45
     here = flow.position(t)
@@ -159,7 +166,11 @@ def test_sigmoid_range_matches_the_errata():
 
 def test_polynomial_arc_passes_through_its_three_points():
     """Eq. 5.22: the arc is at q_i at 0, q_m at t_f/2 and q_f at t_f, starting at rest."""
-    qi, qm, qf = np.array([0.0, 0.0, 0.0]), np.array([0.07, 0.01, 0.12]), np.array([0.15, 0.02, 0.03])
+    qi, qm, qf = (
+        np.array([0.0, 0.0, 0.0]),
+        np.array([0.07, 0.01, 0.12]),
+        np.array([0.15, 0.02, 0.03]),
+    )
     tf = 0.7
     a = polynomial_arc_coefficients(qi, qm, qf, tf)
     at = lambda t: (t ** np.arange(7)) @ a  # noqa: E731

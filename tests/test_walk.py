@@ -44,8 +44,10 @@ def test_stance_feet_do_not_slip(flat_walk):
 
 
 def test_supporting_feet_touch_the_ground(flat_walk):
-    """Every foot the controller has in stance (after touchdown settles) is in contact,
-    so a tripod walk stands on at least three feet at every instant."""
+    """Feet the controller has in stance are in contact with the ground.
+
+    So a tripod walk stands on at least three feet at every instant.
+    """
     gait, result = flat_walk
     swinging = result.log.array("swinging")
     contact = result.log.array("contact")
@@ -61,14 +63,18 @@ def test_seeded_walk_is_deterministic():
     """Two runs with the same settings produce identical trajectories."""
     settings = WalkSettings(seconds=2.0, command=WalkCommand(speed=0.1), seed=7)
     a, b = simulate_walk(SPEC, settings), simulate_walk(SPEC, settings)
-    np.testing.assert_array_equal(a.log.array("body_position_in_world"), b.log.array("body_position_in_world"))
+    np.testing.assert_array_equal(
+        a.log.array("body_position_in_world"), b.log.array("body_position_in_world")
+    )
     np.testing.assert_array_equal(a.log.array("feet_in_world"), b.log.array("feet_in_world"))
 
 
 def test_phantomx_walks_on_its_own_parameters():
     """Nothing is tied to one robot: the PhantomX Mark-4 walks a tripod on its own stride."""
     spec = load_spec("phantomx")
-    settings = WalkSettings(seconds=8.0, command=WalkCommand(speed=0.08, body_height=spec.body_height))
+    settings = WalkSettings(
+        seconds=8.0, command=WalkCommand(speed=0.08, body_height=spec.body_height)
+    )
     m = simulate_walk(spec, settings).metrics
     assert not m["fell"] and not m["frozen"], m["frozen_reason"]
     assert m["mean_speed_mps"] == pytest.approx(0.08, rel=0.15)
@@ -107,4 +113,6 @@ def test_slip_metric_tells_rolling_from_sliding():
     assert stance_slip_m(_stance_log(rolling, rotations), r)[0] < 1e-4
     # Measured from the tick after touchdown (index 2) to lift-off (index 28).
     expected = r * np.sin(angles[28] - angles[2])
-    assert stance_slip_m(_stance_log(pivoting, rotations), r)[0] == pytest.approx(expected, rel=1e-6)
+    assert stance_slip_m(_stance_log(pivoting, rotations), r)[0] == pytest.approx(
+        expected, rel=1e-6
+    )

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -23,7 +25,9 @@ def test_standing_still_is_rest(default_spec):
     controller = WalkController(default_spec)
     for _ in drive(controller, WalkCommand(speed=0.0), 1.0):
         assert controller.state is GaitState.REST
-    np.testing.assert_allclose(controller.feet_in_body()[:, :2], default_spec.rest_feet_in_body()[:, :2])
+    np.testing.assert_allclose(
+        controller.feet_in_body()[:, :2], default_spec.rest_feet_in_body()[:, :2]
+    )
 
 
 @pytest.mark.parametrize("kind", list(GaitKind))
@@ -52,7 +56,7 @@ def test_tripod_supports_on_three_feet_and_alternates(default_spec):
         if not sets or sets[-1] != current:
             sets.append(current)
     assert len(sets) > 8
-    assert all(a != b for a, b in zip(sets, sets[1:], strict=False))
+    assert all(a != b for a, b in itertools.pairwise(sets))
     assert set(sets) == {(0, 2, 4), (1, 3, 5)}
 
 
@@ -90,7 +94,9 @@ def test_stops_and_returns_to_rest(default_spec):
     list(drive(controller, WalkCommand(speed=0.0), 5.0, t0=3.0))
     assert controller.state is GaitState.REST
     rest = default_spec.rest_feet_in_body()[:, :2]
-    np.testing.assert_allclose(controller.feet_in_body()[:, :2], rest, atol=default_spec.foot_radius)
+    np.testing.assert_allclose(
+        controller.feet_in_body()[:, :2], rest, atol=default_spec.foot_radius
+    )
 
 
 def test_unreachable_command_freezes_with_the_leg_named(default_spec):

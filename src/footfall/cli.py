@@ -54,7 +54,9 @@ def _walk_parser(subparsers: argparse._SubParsersAction) -> None:
         default="flow",
         help="swing trajectory: the thesis' flow function or its polynomial-arc baseline",
     )
-    p.add_argument("--height", type=float, default=None, help="body height in m (robot's nominal by default)")
+    p.add_argument(
+        "--height", type=float, default=None, help="body height in m (robot's nominal by default)"
+    )
     p.add_argument("--stride", type=float, default=None, help="stride in m (robot's by default)")
     p.add_argument("--control-rate", type=float, default=100.0, help="controller rate in Hz")
     p.add_argument(
@@ -77,8 +79,9 @@ def _walk(args: argparse.Namespace, console: Console) -> int:
     speed = min(DEFAULT_SPEED_MPS, 0.75 * max_speed) if args.speed is None else args.speed
     if speed > max_speed + 1e-12:
         raise FootfallError(
-            f"--speed {speed} m/s is above the {args.gait} gait's top speed {max_speed:.3f} m/s "
-            f"for robot {spec.name!r} (stride over the shortest step); lower it or use a faster gait"
+            f"--speed {speed} m/s is above the {args.gait} gait's top speed "
+            f"{max_speed:.3f} m/s for robot {spec.name!r} (stride over the shortest step); "
+            "lower it or use a faster gait"
         )
     height = spec.body_height if args.height is None else args.height
     settings = WalkSettings(
@@ -90,12 +93,16 @@ def _walk(args: argparse.Namespace, console: Console) -> int:
         seed=args.seed,
     )
     console.print(
-        f"Walking robot [bold]{spec.name}[/] on [bold]{args.terrain}[/] terrain: {args.gait} gait at "
-        f"{speed:.3f} m/s for {args.seconds:g} s"
+        f"Walking robot [bold]{spec.name}[/] on [bold]{args.terrain}[/] terrain: "
+        f"{args.gait} gait at {speed:.3f} m/s for {args.seconds:g} s"
     )
     with Progress(
-        TextColumn("simulating"), BarColumn(), TextColumn("{task.completed:.1f}/{task.total:.0f} s"),
-        TimeRemainingColumn(), console=console, transient=True,
+        TextColumn("simulating"),
+        BarColumn(),
+        TextColumn("{task.completed:.1f}/{task.total:.0f} s"),
+        TimeRemainingColumn(),
+        console=console,
+        transient=True,
     ) as progress:
         task = progress.add_task("walk", total=args.seconds)
         result = simulate_walk(spec, settings, on_tick=lambda t: progress.update(task, completed=t))
@@ -106,7 +113,10 @@ def _walk(args: argparse.Namespace, console: Console) -> int:
     metrics["mujoco_warnings"] = result.warnings
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     plot_walk(
-        result.log, out / "walk.png", leg=0, leg_name=spec.leg_names[0],
+        result.log,
+        out / "walk.png",
+        leg=0,
+        leg_name=spec.leg_names[0],
         title=f"{spec.name}: {args.gait} gait at {speed:.3f} m/s on {args.terrain} terrain",
     )
     _print_summary(console, metrics)
@@ -148,7 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``footfall`` argument parser."""
     parser = argparse.ArgumentParser(
         prog="footfall",
-        description="Legged robots walking over uneven terrain, in simulation and on recorded data.",
+        description="Legged robots walking over uneven terrain, simulated and recorded.",
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     _walk_parser(subparsers)

@@ -85,7 +85,9 @@ def stance_slip_m(log: WalkLog, foot_radius: float) -> npt.NDArray[np.float64]:
     return np.asarray(slips)
 
 
-def swing_apexes_m(log: WalkLog, foot_radius: float, ground: GroundHeight = flat_ground) -> npt.NDArray[np.float64]:
+def swing_apexes_m(
+    log: WalkLog, foot_radius: float, ground: GroundHeight = flat_ground
+) -> npt.NDArray[np.float64]:
     """Highest clearance of the foot's underside above the ground in each swing [m]."""
     swinging = log.array("swinging")
     feet = log.array("feet_in_world")
@@ -140,7 +142,9 @@ def walk_metrics(
     steady = t > TRANSIENT_SECONDS
     if not steady.any():
         steady = np.ones_like(t, dtype=bool)
-    fell = bool(np.any(tilt_deg > FALL_TILT_DEG) or np.any(height < FALL_HEIGHT_FRACTION * commanded))
+    fell = bool(
+        np.any(tilt_deg > FALL_TILT_DEG) or np.any(height < FALL_HEIGHT_FRACTION * commanded)
+    )
     slips = stance_slip_m(log, foot_radius)
     apexes = swing_apexes_m(log, foot_radius, ground)
     swinging = log.array("swinging")

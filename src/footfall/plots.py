@@ -8,11 +8,11 @@ import matplotlib
 
 matplotlib.use("Agg")  # files only; never needs a display
 
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from footfall.control_loop import WalkLog  # noqa: E402
-from footfall.metrics import GroundHeight, flat_ground  # noqa: E402
+from footfall.control_loop import WalkLog
+from footfall.metrics import GroundHeight, flat_ground
 
 
 def plot_walk(
@@ -69,8 +69,13 @@ def plot_walk(
 
     ax = axes[3]
     ax.plot(100 * feet[:, 0], 100 * feet[:, 2], label=f"{leg_name} foot, measured")
-    ax.plot(100 * commanded_feet[:, 0], 100 * commanded_feet[:, 2], ":", color="gray",
-            label=f"{leg_name} foot, commanded")
+    ax.plot(
+        100 * commanded_feet[:, 0],
+        100 * commanded_feet[:, 2],
+        ":",
+        color="gray",
+        label=f"{leg_name} foot, commanded",
+    )
     ax.set_xlabel("foot x in the world [cm]")
     ax.set_ylabel("foot z [cm]")
     ax.set_aspect("equal", adjustable="datalim")

@@ -117,7 +117,9 @@ class WalkCommand:
         if not all(math.isfinite(v) for v in values):
             raise ConfigError(f"walk command holds a non-finite value: {self}")
         if self.speed < 0:
-            raise ConfigError(f"walk speed must be >= 0 (use the direction to reverse), got {self.speed}")
+            raise ConfigError(
+                f"walk speed must be >= 0 (use the direction to reverse), got {self.speed}"
+            )
         if self.body_height <= 0:
             raise ConfigError(f"body height must be positive, got {self.body_height}")
         if self.speed > 0 and math.hypot(*self.direction) < 1e-9:
@@ -178,8 +180,12 @@ class GaitConfig:
             raise ConfigError("need 0 < min_step_duration <= max_step_duration")
         if self.stride_length is not None and not self.stride_length > 0:
             raise ConfigError(f"gait stride_length must be positive, got {self.stride_length}")
-        for name in ("rest_step_duration", "acceleration_limit",
-                     "yaw_acceleration_limit", "height_rate_limit"):
+        for name in (
+            "rest_step_duration",
+            "acceleration_limit",
+            "yaw_acceleration_limit",
+            "height_rate_limit",
+        ):
             if not getattr(self, name) > 0:
                 raise ConfigError(f"gait {name} must be positive, got {getattr(self, name)}")
 
@@ -221,5 +227,6 @@ class GaitConfig:
         if foot_speed <= 1e-9:
             return self.rest_step_duration
         n = len(self.groups)
-        return min(max(self.stride / (n * foot_speed), self.min_step_duration),
-                   self.max_step_duration)
+        return min(
+            max(self.stride / (n * foot_speed), self.min_step_duration), self.max_step_duration
+        )

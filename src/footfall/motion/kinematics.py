@@ -12,7 +12,8 @@ the foot down)::
 
 Inverse kinematics picks the knee-up branch (``theta3 <= 0``), the posture of the thesis'
 robot, and assumes the foot is out from the coxa axis (``d > 0``): a foot behind the coxa
-axis is reached by turning the coxa half a turn instead. Arrays are vectorised over legs: a leading axis of length 6 follows spec order.
+axis is reached by turning the coxa half a turn instead. Arrays are vectorised over legs:
+a leading axis of length 6 follows spec order.
 """
 
 from __future__ import annotations
@@ -99,7 +100,9 @@ class LegKinematics:
         z = self.L2 * np.sin(t2) + self.L3 * np.sin(t23)
         return np.stack([d * np.cos(t1), d * np.sin(t1), z], axis=-1)
 
-    def inverse(self, feet_in_leg: npt.ArrayLike, check_limits: bool = True) -> npt.NDArray[np.float64]:
+    def inverse(
+        self, feet_in_leg: npt.ArrayLike, check_limits: bool = True
+    ) -> npt.NDArray[np.float64]:
         """Joint angles that put each foot on its target (knee-up branch).
 
         Args:
@@ -223,8 +226,10 @@ class LegKinematics:
         return np.linalg.solve(J, v[..., None])[..., 0]
 
     # Body-frame conveniences -------------------------------------------------------------
-    def inverse_in_body(self, feet_in_body: npt.ArrayLike, check_limits: bool = True) -> npt.NDArray[np.float64]:
-        """Joint angles, shape (6, 3) [rad], for foot targets in the body frame, shape (6, 3) [m]."""
+    def inverse_in_body(
+        self, feet_in_body: npt.ArrayLike, check_limits: bool = True
+    ) -> npt.NDArray[np.float64]:
+        """Joint angles, shape (6, 3) [rad], for foot targets in the body frame [m]."""
         return self.inverse(self.body_to_leg(feet_in_body), check_limits=check_limits)
 
     def forward_in_body(self, angles: npt.ArrayLike) -> npt.NDArray[np.float64]:

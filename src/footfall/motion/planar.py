@@ -59,7 +59,9 @@ class PlanarPose:
         v[..., 0], v[..., 1] = x, y
         return v
 
-    def moved(self, velocity_in_body: tuple[float, float], yaw_rate: float, dt: float) -> PlanarPose:
+    def moved(
+        self, velocity_in_body: tuple[float, float], yaw_rate: float, dt: float
+    ) -> PlanarPose:
         """The pose after moving ``dt`` seconds with a constant twist given in the body frame.
 
         Args:

@@ -31,8 +31,10 @@ from footfall.errors import ConfigError
 
 
 def minimum_jerk(tau: float) -> float:
-    """Progress ``s`` in [0, 1] at normalised time ``tau`` in [0, 1], with zero velocity and
-    acceleration at both ends."""
+    """Minimum-jerk progress ``s`` in [0, 1] at normalised time ``tau`` in [0, 1].
+
+    Velocity and acceleration are zero at both ends.
+    """
     t = min(max(tau, 0.0), 1.0)
     return t * t * t * (10.0 + t * (-15.0 + 6.0 * t))
 
@@ -309,7 +311,9 @@ class PolynomialArcSwing:
         self._t0 = 0.0
         self._fit(np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64), 0.0)
 
-    def _fit(self, start: npt.NDArray[np.float64], target: npt.NDArray[np.float64], t0: float) -> None:
+    def _fit(
+        self, start: npt.NDArray[np.float64], target: npt.NDArray[np.float64], t0: float
+    ) -> None:
         mid = 0.5 * (start + target)
         mid[2] = max(start[2], target[2]) + self.apex_height
         self._t0 = t0
@@ -330,6 +334,8 @@ class PolynomialArcSwing:
     def retarget(self, target: npt.ArrayLike, t: float) -> None:
         """Refit the arc from the position at ``t`` to the new target."""
         if t >= self.duration:
-            self._fit(np.asarray(target, dtype=np.float64), np.asarray(target, dtype=np.float64), 0.0)
+            self._fit(
+                np.asarray(target, dtype=np.float64), np.asarray(target, dtype=np.float64), 0.0
+            )
             return
         self._fit(self.position(t), np.asarray(target, dtype=np.float64), t)

@@ -141,13 +141,17 @@ class WalkController:
 
     @property
     def feet_commanded_in_world(self) -> npt.NDArray[np.float64]:
-        """Commanded foot-sphere centres in the world, rolling of stance feet included,
-        shape (6, 3) [m]."""
+        """Commanded foot-sphere centres in the world, shape (6, 3) [m].
+
+        Includes the rolling displacement of stance feet.
+        """
         return self.feet_in_world + self._rolling_in_world
 
     def feet_in_body(self) -> npt.NDArray[np.float64]:
-        """Foot positions (stance contact anchors, swing positions) in the reference body
-        frame, shape (6, 3) [m]."""
+        """Foot positions in the reference body frame, shape (6, 3) [m].
+
+        Stance feet are given by their contact anchors, swing feet by their path position.
+        """
         feet = self.pose.points_to_body(self.feet_in_world)
         feet[:, 2] -= self.height
         return feet
@@ -173,8 +177,11 @@ class WalkController:
         return (self._velocity_scale, self._yaw_rate * self._velocity_scale)
 
     def _stroke_governor(self, t: float) -> float:
-        """Largest fraction of the commanded twist that keeps every supporting foot within its
-        stroke until it lifts off (protects the legs at start-up and on command changes)."""
+        """Largest fraction of the commanded twist the supporting feet allow.
+
+        Every supporting foot must stay within its stroke until it lifts off; this protects
+        the legs at start-up and on command changes.
+        """
         if self.state is not GaitState.STEPPING:
             return 1.0
         n = len(self.config.groups)
@@ -183,13 +190,19 @@ class WalkController:
         offset = feet - self._rest_in_body[:, :2]
         vx, vy = self._velocity
         # Body-frame velocity of a world-fixed point: -(v + omega x p).
-        drift = np.stack([-vx + self._yaw_rate * feet[:, 1], -vy - self._yaw_rate * feet[:, 0]], axis=1)
+        drift = np.stack(
+            [-vx + self._yaw_rate * feet[:, 1], -vy - self._yaw_rate * feet[:, 0]], axis=1
+        )
         remaining = max(self.step_start + self.step_duration - t, 0.0)
         scale = 1.0
         for leg in np.flatnonzero(~self.swinging):
             steps_until = self._steps_until_swing(int(leg), n)
             u = drift[leg] * (remaining + (steps_until - 1) * self.step_duration)
-            a, b, c = float(u @ u), float(offset[leg] @ u), float(offset[leg] @ offset[leg]) - reach**2
+            a, b, c = (
+                float(u @ u),
+                float(offset[leg] @ u),
+                float(offset[leg] @ offset[leg]) - reach**2,
+            )
             if a < 1e-12:
                 continue
             if c > 0:
@@ -260,7 +273,9 @@ class WalkController:
             return swing
         if self.config.kind is GaitKind.TRIPOD and math.hypot(*self._velocity) > 1e-6:
             swing = tripod_swing_set(
-                self._last_walk_direction, self._rest_in_body, self.feet_in_body(),
+                self._last_walk_direction,
+                self._rest_in_body,
+                self.feet_in_body(),
                 self.spec.mount_positions_in_body,
             )
             self._group_index = 0 if swing[0] else 1
@@ -281,7 +296,9 @@ class WalkController:
             return
         n = len(self.config.groups)
         self.step_duration = (
-            self.config.step_duration(self._foot_speed()) if self._moving() else self.config.rest_step_duration
+            self.config.step_duration(self._foot_speed())
+            if self._moving()
+            else self.config.rest_step_duration
         )
         self.step_start = t
         self.swinging = swing
@@ -293,15 +310,20 @@ class WalkController:
             self.feet_in_world[leg] = start
             self._rolling_in_world[leg] = 0.0
             if self.config.swing == "flow":
-                self.swings[int(leg)] = FlowSwing(start, targets[leg], self.step_duration, self.config.flow)
+                self.swings[int(leg)] = FlowSwing(
+                    start, targets[leg], self.step_duration, self.config.flow
+                )
             else:
                 self.swings[int(leg)] = PolynomialArcSwing(
                     start, targets[leg], self.step_duration, self.config.polynomial_apex
                 )
 
     def _swing_targets(self, n: int) -> npt.NDArray[np.float64]:
-        """Touchdown targets in the world: each leg's rest position at the body pose predicted
-        for the middle of its coming stance, so that the stance stroke is centred on rest."""
+        """Touchdown targets in the world, shape (6, 3) [m].
+
+        Each leg's rest position at the body pose predicted for the middle of its coming
+        stance, so that the stance stroke is centred on rest.
+        """
         remaining = max(self.step_start + self.step_duration - (self._time or 0.0), 0.0)
         horizon = remaining + 0.5 * (n - 1) * self.step_duration
         # Predict with the reference twist actually applied (after the stroke governor), so
@@ -341,7 +363,9 @@ class WalkController:
             roll = -self.spec.foot_radius * (pitch - self._tibia_pitch_at_touchdown)
             radial = np.stack([np.cos(angles[:, 0]), np.sin(angles[:, 0]), np.zeros(6)], axis=1)
             rolling_in_leg = np.where(stance[:, None], roll[:, None] * radial, 0.0)
-            rolling_in_body = self.kinematics.leg_to_body(rolling_in_leg) - self.kinematics.mounts_in_body
+            rolling_in_body = (
+                self.kinematics.leg_to_body(rolling_in_leg) - self.kinematics.mounts_in_body
+            )
             feet = anchors + rolling_in_body
             angles = self.kinematics.inverse_in_body(feet)
             pitch = angles[:, 1] + angles[:, 2]
@@ -353,7 +377,9 @@ class WalkController:
         velocity[:, 0] += -vx + yaw_rate * feet[:, 1]
         velocity[:, 1] += -vy - yaw_rate * feet[:, 0]
         try:
-            rates = self.kinematics.joint_rates(angles, self.kinematics.vectors_body_to_leg(velocity))
+            rates = self.kinematics.joint_rates(
+                angles, self.kinematics.vectors_body_to_leg(velocity)
+            )
         except SingularConfigurationError:
             rates = np.zeros((6, 3))
         return JointTargets(positions=angles, velocities=rates)

@@ -30,9 +30,11 @@ def _require(condition: bool, message: str) -> None:
 
 @dataclass(frozen=True)
 class JointLimits:
-    """Joint ranges of one leg [rad], as ``(lower, upper)`` pairs, in the convention of
-    ``docs/frames.md``: coxa yaw about the leg's z, femur elevation above horizontal,
-    tibia angle relative to the femur's extension (negative bends the foot down)."""
+    """Joint ranges of one leg [rad], as ``(lower, upper)`` pairs.
+
+    In the convention of ``docs/frames.md``: coxa yaw about the leg's z, femur elevation
+    above horizontal, tibia angle relative to the femur's extension (negative bends down).
+    """
 
     coxa: tuple[float, float] = (math.radians(-60.0), math.radians(60.0))
     femur: tuple[float, float] = (math.radians(-90.0), math.radians(90.0))
@@ -41,7 +43,9 @@ class JointLimits:
     def __post_init__(self) -> None:
         for name in ("coxa", "femur", "tibia"):
             lower, upper = getattr(self, name)
-            _require(lower < upper, f"joint limits of {name}: lower {lower} must be < upper {upper}")
+            _require(
+                lower < upper, f"joint limits of {name}: lower {lower} must be < upper {upper}"
+            )
 
     @property
     def lower(self) -> npt.NDArray[np.float64]:
@@ -148,7 +152,9 @@ class HexapodSpec:
         _require(self.body_height > 0, "body_height must be positive")
         _require(self.max_step_height > 0, "max_step_height must be positive")
         _require(self.stride_length > 0, "stride_length must be positive")
-        angles = np.unwrap([math.atan2(m.position_in_body[1], m.position_in_body[0]) for m in self.mounts])
+        angles = np.unwrap(
+            [math.atan2(m.position_in_body[1], m.position_in_body[0]) for m in self.mounts]
+        )
         _require(
             bool(np.all(np.diff(angles) > 0)) and angles[-1] - angles[0] < 2 * math.pi,
             "legs must be listed counter-clockwise seen from above, starting at the front-left leg",

@@ -2,20 +2,15 @@
 
 from __future__ import annotations
 
-import os
+import mujoco
+import numpy as np
+from scipy.spatial.transform import Rotation
 
-os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering unless the user chose a backend
-
-import mujoco  # noqa: E402
-import numpy as np  # noqa: E402
-import numpy.typing as npt  # noqa: E402
-from scipy.spatial.transform import Rotation  # noqa: E402
-
-from footfall.backend import RobotState  # noqa: E402
-from footfall.motion.kinematics import LegKinematics  # noqa: E402
-from footfall.motion.walker import JointTargets  # noqa: E402
-from footfall.robot.spec import HexapodSpec  # noqa: E402
-from footfall.sim.model import hexapod_mjcf, joint_names  # noqa: E402
+from footfall.backend import RobotState
+from footfall.motion.kinematics import LegKinematics
+from footfall.motion.walker import JointTargets
+from footfall.robot.spec import HexapodSpec
+from footfall.sim.model import hexapod_mjcf, joint_names
 
 
 class MujocoHexapod:
@@ -27,7 +22,9 @@ class MujocoHexapod:
         body_height: Initial body height above the ground [m]; the spec's by default.
     """
 
-    def __init__(self, spec: HexapodSpec, terrain_xml: str = "", body_height: float | None = None) -> None:
+    def __init__(
+        self, spec: HexapodSpec, terrain_xml: str = "", body_height: float | None = None
+    ) -> None:
         self.spec = spec
         height = spec.body_height if body_height is None else body_height
         self.xml = hexapod_mjcf(spec, terrain_xml, initial_height=height)
@@ -66,7 +63,9 @@ class MujocoHexapod:
             joint_positions=d.qpos[self._qpos_index].reshape(6, 3).copy(),
             joint_velocities=d.qvel[self._qvel_index].reshape(6, 3).copy(),
             orientation_body_in_world=Rotation.from_quat([x, y, z, w]),
-            angular_velocity_body_in_body=d.sensordata[self._gyro.adr[0] : self._gyro.adr[0] + 3].copy(),
+            angular_velocity_body_in_body=d.sensordata[
+                self._gyro.adr[0] : self._gyro.adr[0] + 3
+            ].copy(),
             position_body_in_world=d.xpos[self._torso].copy(),
             feet_in_world=d.site_xpos[self._foot_sites].copy(),
             feet_in_contact=touch > 1e-6,
@@ -94,7 +93,3 @@ class MujocoHexapod:
     def body_height_above(self, ground_height: float = 0.0) -> float:
         """Body frame height above a ground level [m] (ground truth)."""
         return float(self.data.xpos[self._torso][2] - ground_height)
-
-    def feet_in_world(self) -> npt.NDArray[np.float64]:
-        """Foot centres in the world, shape (6, 3) [m] (ground truth)."""
-        return self.data.site_xpos[self._foot_sites].copy()

@@ -38,7 +38,8 @@ def _leg_xml(spec: HexapodSpec, index: int) -> str:
         <geom name="{name}_coxa" type="capsule" fromto="0 0 0 {L1:.6g} 0 0" mass="{m_coxa:.6g}"/>
         <body name="{name}_femur" pos="{L1:.6g} 0 0">
           <joint name="{name}_femur" axis="0 -1 0" range="{_fmt(lim.femur)}"/>
-          <geom name="{name}_femur" type="capsule" fromto="0 0 0 {L2:.6g} 0 0" mass="{m_femur:.6g}"/>
+          <geom name="{name}_femur" type="capsule" fromto="0 0 0 {L2:.6g} 0 0"
+                mass="{m_femur:.6g}"/>
           <body name="{name}_tibia" pos="{L2:.6g} 0 0">
             <joint name="{name}_tibia" axis="0 -1 0" range="{_fmt(lim.tibia)}"/>
             <geom name="{name}_tibia" type="capsule" fromto="0 0 0 {L3 - spec.foot_radius:.6g} 0 0"
@@ -50,7 +51,9 @@ def _leg_xml(spec: HexapodSpec, index: int) -> str:
       </body>"""
 
 
-def hexapod_mjcf(spec: HexapodSpec, terrain_xml: str = "", initial_height: float | None = None) -> str:
+def hexapod_mjcf(
+    spec: HexapodSpec, terrain_xml: str = "", initial_height: float | None = None
+) -> str:
     """MJCF of the robot standing over a floor.
 
     Args:
@@ -65,9 +68,7 @@ def hexapod_mjcf(spec: HexapodSpec, terrain_xml: str = "", initial_height: float
     sx, sy, sz = (0.5 * s for s in spec.body_size)
     servo = spec.servo
     legs = "".join(_leg_xml(spec, i) for i in range(len(spec.mounts)))
-    actuators = "\n    ".join(
-        f'<position name="{j}" joint="{j}"/>' for j in joint_names(spec)
-    )
+    actuators = "\n    ".join(f'<position name="{j}" joint="{j}"/>' for j in joint_names(spec))
     sensors = "\n    ".join(f'<touch name="{n}_touch" site="{n}_foot"/>' for n in spec.leg_names)
     extent = max(spec.body_size) + 2 * (spec.coxa_length + spec.femur_length + spec.tibia_length)
     return f"""<mujoco model="hexapod-{spec.name}">
@@ -76,14 +77,15 @@ def hexapod_mjcf(spec: HexapodSpec, terrain_xml: str = "", initial_height: float
   <statistic extent="{extent:.4g}" center="0 0 {height:.4g}"/>
   <visual>
     <headlight ambient="0.35 0.35 0.35" diffuse="0.6 0.6 0.6"/>
-    <global offwidth="1280" offheight="960"/>
   </visual>
   <default>
     <joint damping="{servo.joint_damping:.6g}" armature="{servo.armature:.6g}"/>
-    <position kp="{servo.kp:.6g}" kv="{servo.kv:.6g}" forcerange="{-servo.max_torque:.6g} {servo.max_torque:.6g}"/>
+    <position kp="{servo.kp:.6g}" kv="{servo.kv:.6g}"
+              forcerange="{-servo.max_torque:.6g} {servo.max_torque:.6g}"/>
     <geom contype="2" conaffinity="1" size="{LEG_RADIUS:.6g}" rgba="0.25 0.3 0.35 1"/>
     <default class="foot">
-      <geom type="sphere" friction="{spec.foot_friction:.6g} 0.02 0.001" mass="0.005" rgba="0.1 0.1 0.1 1"/>
+      <geom type="sphere" friction="{spec.foot_friction:.6g} 0.02 0.001" mass="0.005"
+            rgba="0.1 0.1 0.1 1"/>
     </default>
     <default class="terrain">
       <geom contype="1" conaffinity="2" rgba="0.62 0.58 0.52 1" friction="1 0.02 0.001"/>
@@ -103,7 +105,6 @@ def hexapod_mjcf(spec: HexapodSpec, terrain_xml: str = "", initial_height: float
       <geom name="torso" type="box" size="{sx:.6g} {sy:.6g} {sz:.6g}" mass="{spec.body_mass:.6g}"
             rgba="0.85 0.45 0.1 1"/>
       <site name="imu" pos="0 0 0" size="0.01"/>
-      <camera name="track" mode="trackcom" pos="-0.6 -0.9 0.55" xyaxes="0.83 -0.55 0 0.25 0.38 0.89"/>
       {legs}
     </body>
   </worldbody>

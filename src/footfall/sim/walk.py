@@ -42,7 +42,9 @@ class WalkSettings:
 
     def __post_init__(self) -> None:
         if self.terrain not in TERRAINS:
-            raise ConfigError(f"unknown terrain {self.terrain!r}; choose one of {', '.join(TERRAINS)}")
+            raise ConfigError(
+                f"unknown terrain {self.terrain!r}; choose one of {', '.join(TERRAINS)}"
+            )
         if not self.seconds > 0:
             raise ConfigError(f"walk seconds must be positive, got {self.seconds}")
         if not self.control_rate_hz > 0:
