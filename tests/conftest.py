@@ -19,3 +19,14 @@ def default_spec() -> HexapodSpec:
 @pytest.fixture(scope="session", params=["default", "phantomx"])
 def any_spec(request: pytest.FixtureRequest) -> HexapodSpec:
     return load_spec(request.param)
+
+
+SHARED_DATA = __import__("pathlib").Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+def shared_data(relative: str):
+    """Path of a file in the shared reference data, skipping the test when it is absent."""
+    path = SHARED_DATA / relative
+    if not path.exists():
+        pytest.skip(f"shared reference data not present: {relative}")
+    return path

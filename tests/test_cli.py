@@ -70,3 +70,75 @@ def test_help_explains_every_walk_option():
     for option in ("--terrain", "--seconds", "--speed", "--gait", "--robot", "--seed", "--out"):
         assert option in help_text
     assert all(action.help for action in walk._actions)
+
+
+MAP_KEYS = {"height_rmse_m", "coverage", "frames", "map_update_ms_median"}
+
+
+def test_map_writes_images_and_metrics(tmp_path):
+    """`footfall map --terrain flat` writes heightmap.png, scoremap.png and metrics.json."""
+    out = tmp_path / "map"
+    code = main(
+        [
+            "map",
+            "--terrain",
+            "flat",
+            "--seconds",
+            "2",
+            "--image-size",
+            "160",
+            "120",
+            "--out",
+            str(out),
+        ]
+    )
+    assert code == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert MAP_KEYS <= metrics.keys()
+    assert abs(metrics["frames"] - 30) <= 1 and metrics["height_rmse_m"] < 0.005
+    for name in ("heightmap.png", "scoremap.png"):
+        assert (out / name).read_bytes()[:4] == b"\x89PNG"
+
+
+def test_map_of_a_recorded_sequence(tmp_path):
+    """`footfall convert redwood` then `footfall map --tum` maps the Redwood room."""
+    from conftest import shared_data
+
+    source = shared_data("rgbd/redwood_livingroom")
+    assert main(["convert", "redwood", str(source), str(tmp_path / "tum")]) == 0
+    out = tmp_path / "map"
+    code = main(
+        [
+            "map",
+            "--tum",
+            str(tmp_path / "tum"),
+            "--intrinsics",
+            "525",
+            "525",
+            "319.5",
+            "239.5",
+            "--up",
+            "0",
+            "1",
+            "0",
+            "--out",
+            str(out),
+        ]
+    )
+    assert code == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["frames"] == 5 and metrics["floor_height_spread_m"] < 0.02
+
+
+def test_bench_mapping_writes_bench_json(tmp_path):
+    """`footfall bench mapping` writes the figures and their baselines."""
+    assert main(["bench", "mapping", "--repeats", "2", "--out", str(tmp_path)]) == 0
+    bench = json.loads((tmp_path / "bench.json").read_text())
+    for key in ("frame_ms", "points_per_s", "score_ms", "baseline_frame_ms", "baseline_score_ms"):
+        assert bench[key] > 0
+
+
+def test_map_bad_tum_folder_is_a_clear_error(tmp_path, capsys):
+    """Mapping a folder that holds no sequence names the problem."""
+    assert main(["map", "--tum", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
+    assert "depth" in capsys.readouterr().out

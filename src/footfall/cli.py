@@ -154,6 +154,244 @@ def _print_summary(console: Console, metrics: dict[str, object]) -> None:
     console.print(table)
 
 
+def _map_parser(subparsers: argparse._SubParsersAction) -> None:
+    from footfall.sim.survey import NOISE_MODELS
+    from footfall.sim.terrain import TERRAIN_NAMES
+
+    p = subparsers.add_parser(
+        "map",
+        help="build a height map and score map, in simulation or from a recorded sequence",
+        description=(
+            "Walk the simulated hexapod across a terrain while its depth camera builds the "
+            "rolling height map, or map a recorded TUM-layout sequence (--tum). Writes "
+            "heightmap.png, scoremap.png and metrics.json to --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument(
+        "--terrain", choices=TERRAIN_NAMES, default="course", help="terrain to walk and map"
+    )
+    p.add_argument("--seconds", type=float, default=20.0, help="walking time in seconds")
+    p.add_argument(
+        "--noise",
+        choices=NOISE_MODELS,
+        default="none",
+        help="pose estimate: true, or SLAM-like drift and jitter",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the terrain and the pose noise")
+    p.add_argument(
+        "--image-size",
+        type=int,
+        nargs=2,
+        metavar=("W", "H"),
+        default=(640, 480),
+        help="depth image size in pixels",
+    )
+    p.add_argument(
+        "--fusion",
+        choices=("latest", "max", "variance"),
+        default="latest",
+        help="per-cell fusion rule",
+    )
+    p.add_argument(
+        "--tum", type=Path, default=None, help="map this TUM-layout sequence instead of simulating"
+    )
+    p.add_argument(
+        "--intrinsics",
+        type=float,
+        nargs=4,
+        metavar=("FX", "FY", "CX", "CY"),
+        default=(525.0, 525.0, 319.5, 239.5),
+        help="depth camera intrinsics in pixels (with --tum)",
+    )
+    p.add_argument(
+        "--up",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        default=(0.0, 0.0, 1.0),
+        help="the recorded world's up axis (with --tum); TUM and Redwood worlds are not z-up",
+    )
+    p.add_argument(
+        "--depth-scale", type=float, default=1.0 / 5000.0, help="metres per depth unit (with --tum)"
+    )
+    p.add_argument("--out", type=Path, default=Path("footfall-out/map"), help="output folder")
+    p.set_defaults(handler=_map)
+
+
+def _map(args: argparse.Namespace, console: Console) -> int:
+    from footfall.mapping.height_map import HeightMapConfig
+    from footfall.plots import plot_height_map, plot_score_map
+    from footfall.scoring.walkability import ScoreConfig
+
+    map_config = HeightMapConfig(fusion=args.fusion)
+    score_config = ScoreConfig()
+    out: Path = args.out
+    if args.tum is not None:
+        from footfall.datasets.tum import map_tum_sequence
+        from footfall.sensing.camera import PinholeCamera
+
+        fx, fy, cx, cy = args.intrinsics
+        first = next(iter(sorted((args.tum / "depth").glob("*.png"))), None)
+        if first is None:
+            raise FootfallError(f"no depth/*.png in {args.tum}")
+        from footfall.datasets.tum import load_depth_png
+
+        height, width = load_depth_png(first).shape
+        camera = PinholeCamera(fx, fy, cx, cy, width, height)
+        console.print(f"Mapping recorded sequence {args.tum}")
+        result = map_tum_sequence(
+            args.tum, camera, args.up, map_config, score_config, args.depth_scale
+        )
+        snapshot, scores, path_xy, metrics = (
+            result.snapshot,
+            result.scores,
+            result.camera_path_xy,
+            result.metrics,
+        )
+        path_label = "camera path"
+    else:
+        from footfall.sim.model import CameraMount
+        from footfall.sim.survey import MappingSettings, simulate_mapping
+
+        width, height = args.image_size
+        settings = MappingSettings(
+            terrain=args.terrain,
+            seconds=args.seconds,
+            noise=args.noise,
+            seed=args.seed,
+            camera=CameraMount(width=width, height=height),
+            map=map_config,
+            score=score_config,
+        )
+        console.print(
+            f"Mapping [bold]{args.terrain}[/] terrain for {args.seconds:g} s "
+            f"({width}x{height} depth at {settings.camera.rate_hz:g} Hz, pose noise: {args.noise})"
+        )
+        with Progress(
+            TextColumn("simulating"),
+            BarColumn(),
+            TextColumn("{task.completed:.1f}/{task.total:.0f} s"),
+            TimeRemainingColumn(),
+            console=console,
+            transient=True,
+        ) as progress:
+            task = progress.add_task("map", total=args.seconds)
+            survey = simulate_mapping(
+                load_spec("default"), settings, on_tick=lambda t: progress.update(task, completed=t)
+            )
+        snapshot, scores, path_xy, metrics = (
+            survey.snapshot,
+            survey.scores,
+            survey.path_xy,
+            survey.metrics,
+        )
+        path_label = "robot path"
+    out.mkdir(parents=True, exist_ok=True)
+    plot_height_map(
+        snapshot.heights,
+        snapshot.origin,
+        snapshot.resolution,
+        out / "heightmap.png",
+        path_xy,
+        path_label=path_label,
+    )
+    plot_score_map(
+        scores.score,
+        scores.valid,
+        snapshot.origin,
+        snapshot.resolution,
+        score_config.threshold,
+        out / "scoremap.png",
+        path_xy,
+        path_label=path_label,
+    )
+    (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
+    table = Table(title="map summary")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    for key, value in metrics.items():
+        if isinstance(value, float):
+            table.add_row(key, f"{value:.4g}")
+        elif isinstance(value, int | str):
+            table.add_row(key, str(value))
+    console.print(table)
+    console.print(
+        f"Wrote {out / 'heightmap.png'}, {out / 'scoremap.png'} and {out / 'metrics.json'}"
+    )
+    return 0
+
+
+def _convert_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "convert",
+        help="convert recorded data into the TUM RGB-D layout",
+        description="Convert recorded data into the TUM RGB-D layout `footfall map --tum` reads.",
+    )
+    kinds = p.add_subparsers(dest="kind", metavar="KIND", required=True)
+    redwood = kinds.add_parser(
+        "redwood",
+        help="a Redwood/Open3D sequence (depth/*.png in mm, trajectory.log)",
+        description=(
+            "Convert a Redwood sequence: depth PNGs in millimetres become TUM units (1/5000 m), "
+            "trajectory.log camera-to-world matrices become groundtruth.txt, frames are "
+            "stamped i / fps."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    redwood.add_argument("source", type=Path, help="the Redwood folder")
+    redwood.add_argument("destination", type=Path, help="output folder (TUM layout)")
+    redwood.add_argument("--fps", type=float, default=30.0, help="frame rate for the timestamps")
+    redwood.set_defaults(handler=_convert_redwood)
+
+
+def _convert_redwood(args: argparse.Namespace, console: Console) -> int:
+    from footfall.datasets.redwood import convert_redwood
+
+    frames = convert_redwood(args.source, args.destination, args.fps)
+    console.print(f"Wrote {frames} frames in the TUM layout to {args.destination}")
+    return 0
+
+
+def _bench_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "bench",
+        help="measure footfall's speed",
+        description="Measure footfall's speed against baselines timed in the same run.",
+    )
+    kinds = p.add_subparsers(dest="suite", metavar="SUITE", required=True)
+    mapping = kinds.add_parser(
+        "mapping",
+        help="depth frame -> map update, and scoring, against plain NumPy",
+        description=(
+            "Time one 640x480 depth frame -> points -> map update and the scoring of a "
+            "256x256 map, against plain-NumPy baselines; writes bench.json to --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    mapping.add_argument("--repeats", type=int, default=30, help="timed repetitions per figure")
+    mapping.add_argument(
+        "--out", type=Path, default=Path("footfall-out/bench"), help="output folder"
+    )
+    mapping.set_defaults(handler=_bench_mapping)
+
+
+def _bench_mapping(args: argparse.Namespace, console: Console) -> int:
+    from footfall.benchmarking import run_mapping_benchmark
+
+    results = run_mapping_benchmark(repeats=args.repeats)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "bench.json").write_text(json.dumps(results, indent=2) + "\n")
+    table = Table(title="mapping benchmark (one core)")
+    table.add_column("figure")
+    table.add_column("value", justify="right")
+    for key, value in results.items():
+        table.add_row(key, f"{value:,.3f}" if isinstance(value, float) else str(value))
+    console.print(table)
+    console.print(f"Wrote {args.out / 'bench.json'}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``footfall`` argument parser."""
     parser = argparse.ArgumentParser(
@@ -162,6 +400,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     _walk_parser(subparsers)
+    _map_parser(subparsers)
+    _convert_parser(subparsers)
+    _bench_parser(subparsers)
     return parser
 
 

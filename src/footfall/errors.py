@@ -28,3 +28,15 @@ class UnreachableTargetError(FootfallError, ValueError):
 
 class SingularConfigurationError(FootfallError, ValueError):
     """A leg is at (or too near) a kinematic singularity to map foot velocity to joint rates."""
+
+
+class DepthImageError(FootfallError, ValueError):
+    """A depth image has the wrong shape or type, or no scale for integer depth."""
+
+
+class InvalidPoseError(FootfallError, ValueError):
+    """A pose is not a rigid transform: a non-unit quaternion, a non-finite value."""
+
+
+class DatasetError(FootfallError, ValueError):
+    """A recorded sequence is missing files or holds malformed entries."""

@@ -87,3 +87,128 @@ def plot_walk(
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def _map_axes(
+    ax,
+    known: np.ndarray,
+    origin: tuple[float, float],
+    resolution: float,
+    path_xy: np.ndarray | None,
+) -> list[float]:
+    """Label the axes, and zoom on the known cells and the path (with a margin)."""
+    x0, y0 = origin
+    size = known.shape[0]
+    extent = [x0, x0 + size * resolution, y0, y0 + size * resolution]
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_aspect("equal")
+    cells = np.argwhere(known)
+    if cells.size:
+        lo = np.asarray(origin) + cells.min(axis=0) * resolution
+        hi = np.asarray(origin) + (cells.max(axis=0) + 1) * resolution
+        if path_xy is not None and len(path_xy):
+            lo, hi = np.minimum(lo, path_xy.min(axis=0)), np.maximum(hi, path_xy.max(axis=0))
+        margin = 0.15
+        ax.set_xlim(max(extent[0], lo[0] - margin), min(extent[1], hi[0] + margin))
+        ax.set_ylim(max(extent[2], lo[1] - margin), min(extent[3], hi[1] + margin))
+    return extent
+
+
+def _draw_path(ax, path_xy: np.ndarray | None, label: str) -> None:
+    if path_xy is None or len(path_xy) == 0:
+        return
+    ax.plot(path_xy[:, 0], path_xy[:, 1], color="cyan", lw=1.5, label=label)
+    ax.plot(*path_xy[0], "o", color="cyan", ms=5)
+    ax.plot(*path_xy[-1], ">", color="cyan", ms=7)
+    ax.legend(loc="upper right", fontsize=8)
+
+
+def plot_height_map(
+    heights: np.ndarray,
+    origin: tuple[float, float],
+    resolution: float,
+    path: Path,
+    path_xy: np.ndarray | None = None,
+    title: str = "height map",
+    path_label: str = "robot path",
+) -> Path:
+    """Top view of a height map [m] with a colour bar; unknown cells grey.
+
+    Args:
+        heights: Shape (N, N), index ``[i, j]`` along world x and y [m]; NaN unknown.
+        origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
+        resolution: Cell side [m].
+        path: Output PNG.
+        path_xy: Robot or camera path to draw, shape (n, 2) [m].
+        title: Figure title.
+        path_label: Legend of the path.
+    """
+    fig, ax = plt.subplots(figsize=(8, 7), constrained_layout=True)
+    extent = _map_axes(ax, np.isfinite(heights), origin, resolution, path_xy)
+    ax.set_facecolor("0.75")
+    image = ax.imshow(
+        np.ma.masked_invalid(heights.T),
+        origin="lower",
+        extent=extent,
+        cmap="terrain",
+        interpolation="nearest",
+    )
+    fig.colorbar(image, ax=ax, label="height [m]", shrink=0.8)
+    _draw_path(ax, path_xy, path_label)
+    ax.set_title(f"{title} (grey: unknown)")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_score_map(
+    score: np.ndarray,
+    valid: np.ndarray,
+    origin: tuple[float, float],
+    resolution: float,
+    threshold: float,
+    path: Path,
+    path_xy: np.ndarray | None = None,
+    title: str = "walkability score",
+    path_label: str = "robot path",
+) -> Path:
+    """Top view of a score map: dark is walkable (thesis Figs. 6.6-6.8), invalid in red.
+
+    Args:
+        score: Shape (N, N); NaN unknown.
+        valid: Shape (N, N).
+        origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
+        resolution: Cell side [m].
+        threshold: Score threshold, for the colour bar's range.
+        path: Output PNG.
+        path_xy: Robot or camera path to draw, shape (n, 2) [m].
+        title: Figure title.
+        path_label: Legend of the path.
+    """
+    fig, ax = plt.subplots(figsize=(8, 7), constrained_layout=True)
+    extent = _map_axes(ax, np.isfinite(score), origin, resolution, path_xy)
+    ax.set_facecolor("0.75")
+    image = ax.imshow(
+        np.ma.masked_invalid(score.T),
+        origin="lower",
+        extent=extent,
+        cmap="gray",
+        vmin=0.0,
+        vmax=2.0 * threshold,
+        interpolation="nearest",
+    )
+    fig.colorbar(
+        image, ax=ax, label=f"score (lower is better; invalid at >= {threshold:g})", shrink=0.8
+    )
+    invalid = np.where(np.isfinite(score) & ~valid, 1.0, np.nan)
+    ax.imshow(
+        invalid.T, origin="lower", extent=extent, cmap="autumn", alpha=0.45, interpolation="nearest"
+    )
+    _draw_path(ax, path_xy, path_label)
+    ax.set_title(f"{title} (red: invalid, grey: unknown)")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

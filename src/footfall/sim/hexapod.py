@@ -10,25 +10,40 @@ from footfall.backend import RobotState
 from footfall.motion.kinematics import LegKinematics
 from footfall.motion.walker import JointTargets
 from footfall.robot.spec import HexapodSpec
-from footfall.sim.model import hexapod_mjcf, joint_names
+from footfall.sim.model import CameraMount, hexapod_mjcf, joint_names
+from footfall.sim.terrain import Flat, Terrain
 
 
 class MujocoHexapod:
-    """A hexapod simulated in MuJoCo, standing on its rest stance at start.
+    """A hexapod simulated in MuJoCo, standing on its rest stance at the terrain's start.
 
     Args:
         spec: The robot.
-        terrain_xml: Extra world geoms (see :func:`footfall.sim.model.hexapod_mjcf`).
+        terrain: The ground; flat when None.
+        camera: A depth camera on the body (see :class:`footfall.sim.camera.SimDepthCamera`).
         body_height: Initial body height above the ground [m]; the spec's by default.
     """
 
     def __init__(
-        self, spec: HexapodSpec, terrain_xml: str = "", body_height: float | None = None
+        self,
+        spec: HexapodSpec,
+        terrain: Terrain | None = None,
+        camera: CameraMount | None = None,
+        body_height: float | None = None,
     ) -> None:
         self.spec = spec
+        self.terrain = terrain or Flat()
+        self.camera_mount = camera
         height = spec.body_height if body_height is None else body_height
-        self.xml = hexapod_mjcf(spec, terrain_xml, initial_height=height)
+        x0, y0 = self.terrain.start
+        ground = float(self.terrain.height(x0, y0))
+        pieces = self.terrain.mjcf()
+        self.xml = hexapod_mjcf(spec, pieces, camera, initial_position=(x0, y0, ground + height))
         self.model = mujoco.MjModel.from_xml_string(self.xml)
+        for field in pieces.height_fields:
+            hfield = self.model.hfield(field.name)
+            start = int(hfield.adr[0])
+            self.model.hfield_data[start : start + field.elevation.size] = field.elevation.ravel()
         self.data = mujoco.MjData(self.model)
         names = joint_names(spec)
         self._qpos_index = np.array([self.model.joint(n).qposadr[0] for n in names])

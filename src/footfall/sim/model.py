@@ -9,12 +9,80 @@ are position actuators with high gain and high damping (thesis §3.3), integrate
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
+from footfall.errors import ConfigError
 from footfall.robot.spec import HexapodSpec
+from footfall.sim.terrain import TerrainXml
 
 TIMESTEP = 0.002  # [s]
+ROBOT_GEOM_GROUP = 1  # robot geoms; terrain geoms stay in group 0
 LEG_RADIUS = 0.008  # capsule radius of the leg segments [m]
+
+
+@dataclass(frozen=True)
+class CameraMount:
+    """A depth camera on the body, looking ahead and down (a RealSense D435i by default).
+
+    The default mount puts it at the front of the body on a short mast, 8 cm above the body
+    frame, tilted 30 degrees down: from there it sees the ground from just ahead of the
+    front feet to about 1.5 m, and about as wide.
+
+    Attributes:
+        position_in_body: Optical centre in the body frame [m].
+        pitch: Downward tilt of the optical axis below the body's x axis [rad].
+        horizontal_fov: Horizontal field of view [rad].
+        vertical_fov: Vertical field of view [rad].
+        width: Image width [px].
+        height: Image height [px].
+        rate_hz: Frame rate [Hz].
+        max_range: Farthest usable depth [m].
+    """
+
+    position_in_body: tuple[float, float, float] = (0.13, 0.0, 0.08)
+    pitch: float = math.radians(30.0)
+    horizontal_fov: float = math.radians(87.0)
+    vertical_fov: float = math.radians(58.0)
+    width: int = 640
+    height: int = 480
+    rate_hz: float = 15.0
+    max_range: float = 3.0
+
+    def __post_init__(self) -> None:
+        if not (0 < self.horizontal_fov < math.pi and 0 < self.vertical_fov < math.pi):
+            raise ConfigError("camera fields of view must lie between 0 and pi")
+        if not (self.width > 0 and self.height > 0 and self.rate_hz > 0 and self.max_range > 0):
+            raise ConfigError("camera size, rate and range must be positive")
+
+    @property
+    def focal_lengths(self) -> tuple[float, float]:
+        """``(fx, fy)`` [px]."""
+        return (
+            0.5 * self.width / math.tan(0.5 * self.horizontal_fov),
+            0.5 * self.height / math.tan(0.5 * self.vertical_fov),
+        )
+
+    def with_resolution(self, width: int, height: int) -> CameraMount:
+        """The same camera rendering at another image size."""
+        from dataclasses import replace
+
+        return replace(self, width=width, height=height)
+
+    def mjcf(self) -> str:
+        """The ``<camera>`` element (MuJoCo cameras look along -z with y up)."""
+        fx, fy = self.focal_lengths
+        s, c = math.sin(self.pitch), math.cos(self.pitch)
+        # Pixel size is arbitrary for MuJoCo; 1 um makes focal lengths in pixels exact.
+        pixel = 1e-6
+        return (
+            f'<camera name="depth" pos="{_fmt(self.position_in_body)}" '
+            f'xyaxes="0 -1 0 {s:.9g} 0 {c:.9g}" resolution="{self.width} {self.height}" '
+            f'sensorsize="{self.width * pixel:.9g} {self.height * pixel:.9g}" '
+            f'focalpixel="{fx:.9g} {fy:.9g}" principalpixel="0 0"/>'
+        )
 
 
 def joint_names(spec: HexapodSpec) -> list[str]:
@@ -52,24 +120,38 @@ def _leg_xml(spec: HexapodSpec, index: int) -> str:
 
 
 def hexapod_mjcf(
-    spec: HexapodSpec, terrain_xml: str = "", initial_height: float | None = None
+    spec: HexapodSpec,
+    terrain: TerrainXml | None = None,
+    camera: CameraMount | None = None,
+    initial_position: tuple[float, float, float] | None = None,
 ) -> str:
-    """MJCF of the robot standing over a floor.
+    """MJCF of the robot on a terrain.
 
     Args:
         spec: The robot.
-        terrain_xml: Extra ``<worldbody>`` elements (terrain geoms) placed beside the floor.
-        initial_height: Height of the body frame at load time [m]; the nominal height if None.
+        terrain: Terrain pieces; the bare floor when None.
+        camera: Depth camera on the body, if any.
+        initial_position: Body position at load time [m]; above the origin at the nominal
+            height when None.
 
     Returns:
         The model as an MJCF string.
     """
-    height = spec.body_height if initial_height is None else initial_height
+    terrain = terrain or TerrainXml()
+    position = (0.0, 0.0, spec.body_height) if initial_position is None else initial_position
+    height = position[2]
     sx, sy, sz = (0.5 * s for s in spec.body_size)
     servo = spec.servo
     legs = "".join(_leg_xml(spec, i) for i in range(len(spec.mounts)))
     actuators = "\n    ".join(f'<position name="{j}" joint="{j}"/>' for j in joint_names(spec))
     sensors = "\n    ".join(f'<touch name="{n}_touch" site="{n}_foot"/>' for n in spec.leg_names)
+    # Without its own floor a terrain still gets a plane far below, so a robot that walks
+    # off it falls onto something.
+    floor_z = 0.0 if terrain.floor else -1.0
+    floor = (
+        f'<geom name="floor" class="terrain" type="plane" pos="0 0 {floor_z}" size="0 0 0.05" '
+        'material="grid"/>'
+    )
     extent = max(spec.body_size) + 2 * (spec.coxa_length + spec.femur_length + spec.tibia_length)
     return f"""<mujoco model="hexapod-{spec.name}">
   <compiler angle="radian" autolimits="true"/>
@@ -82,29 +164,31 @@ def hexapod_mjcf(
     <joint damping="{servo.joint_damping:.6g}" armature="{servo.armature:.6g}"/>
     <position kp="{servo.kp:.6g}" kv="{servo.kv:.6g}"
               forcerange="{-servo.max_torque:.6g} {servo.max_torque:.6g}"/>
-    <geom contype="2" conaffinity="1" size="{LEG_RADIUS:.6g}" rgba="0.25 0.3 0.35 1"/>
+    <geom contype="2" conaffinity="1" group="1" size="{LEG_RADIUS:.6g}" rgba="0.25 0.3 0.35 1"/>
     <default class="foot">
       <geom type="sphere" friction="{spec.foot_friction:.6g} 0.02 0.001" mass="0.005"
             rgba="0.1 0.1 0.1 1"/>
     </default>
     <default class="terrain">
-      <geom contype="1" conaffinity="2" rgba="0.62 0.58 0.52 1" friction="1 0.02 0.001"/>
+      <geom contype="1" conaffinity="2" group="0" rgba="0.62 0.58 0.52 1" friction="1 0.02 0.001"/>
     </default>
   </default>
   <asset>
     <texture name="grid" type="2d" builtin="checker" rgb1="0.82 0.82 0.8" rgb2="0.7 0.7 0.68"
              width="512" height="512" mark="edge" markrgb="0.5 0.5 0.5"/>
     <material name="grid" texture="grid" texrepeat="1 1" texuniform="true"/>
+    {terrain.assets}
   </asset>
   <worldbody>
     <light name="sun" pos="0 0 4" dir="0 0 -1" directional="true"/>
-    <geom name="floor" class="terrain" type="plane" size="0 0 0.05" material="grid"/>
-    {terrain_xml}
-    <body name="torso" pos="0 0 {height:.6g}">
+    {floor}
+    {terrain.worldbody}
+    <body name="torso" pos="{_fmt(position)}">
       <freejoint name="root"/>
       <geom name="torso" type="box" size="{sx:.6g} {sy:.6g} {sz:.6g}" mass="{spec.body_mass:.6g}"
             rgba="0.85 0.45 0.1 1"/>
       <site name="imu" pos="0 0 0" size="0.01"/>
+      {camera.mjcf() if camera is not None else ""}
       {legs}
     </body>
   </worldbody>

@@ -1,0 +1,1 @@
+"""Reading point-cloud files."""

@@ -1,0 +1,1 @@
+"""Mapping: the rolling height map built from depth images and poses."""

@@ -1,0 +1,351 @@
+"""Rolling height map: an N x N two-dimensional circular buffer that follows the robot.
+
+A world point ``(x, y)`` falls in the global cell ``(floor(x / res), floor(y / res))``
+(thesis eq. 4.11 with ``res`` in metres per cell) and is stored at buffer index
+``(i mod N, j mod N)``. The buffer holds the window of global cells
+``[origin, origin + N)`` on each axis; moving the window (:meth:`HeightMap.recentre`)
+erases only the rows and columns that scroll out, so a move costs O(N * cells moved),
+never a copy of the map. Erased cells become unknown.
+
+Fusion of a new frame (``HeightMapConfig.fusion``): within one frame, each cell takes the
+highest point that falls in it (the top of whatever is there: the side of a box seen at a
+slant is lower than its top). Across frames:
+
+- ``latest`` (default, the thesis' rule): the newest frame's value replaces the cell;
+- ``max``: the highest value ever seen stays;
+- ``variance``: a scalar Kalman update whose measurement noise grows with the square of
+  the range, gated so a value far off the estimate (the scene changed) replaces it.
+
+Invalid readings (no return, NaN, out of range) never touch the map; neither do points
+outside the window, which are counted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.errors import ConfigError
+from footfall.mapping import kernels
+from footfall.sensing.camera import DepthStats, PinholeCamera
+from footfall.sensing.pose import Pose
+
+
+class FusionRule(StrEnum):
+    """How a new observation of a cell combines with what the map holds."""
+
+    LATEST = "latest"
+    MAX = "max"
+    VARIANCE = "variance"
+
+
+_RULE_CODES = {
+    FusionRule.LATEST: kernels.FUSE_LATEST,
+    FusionRule.MAX: kernels.FUSE_MAX,
+    FusionRule.VARIANCE: kernels.FUSE_VARIANCE,
+}
+
+
+@dataclass(frozen=True)
+class HeightMapConfig:
+    """Height map settings.
+
+    Attributes:
+        size: Cells per side, N.
+        resolution: Cell side [m].
+        fusion: Fusion rule across frames.
+        range_noise: Depth noise coefficient of the ``variance`` rule: the standard deviation
+            of a reading at range r is ``range_noise * r^2`` [1/m].
+        process_noise: Standard deviation added to a cell per update (``variance``) [m].
+        gate: Innovation gate of the ``variance`` rule [standard deviations].
+    """
+
+    size: int = 256
+    resolution: float = 0.02
+    fusion: FusionRule = FusionRule.LATEST
+    range_noise: float = 0.003
+    process_noise: float = 0.002
+    gate: float = 4.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "fusion", FusionRule(self.fusion))
+        if self.size < 8:
+            raise ConfigError(f"height map size must be >= 8 cells, got {self.size}")
+        if not self.resolution > 0:
+            raise ConfigError(f"height map resolution must be positive, got {self.resolution}")
+
+    @property
+    def extent(self) -> float:
+        """Side of the mapped square [m]."""
+        return self.size * self.resolution
+
+
+@dataclass(frozen=True)
+class IntegrationStats:
+    """What became of one frame's readings.
+
+    Attributes:
+        depth: Pixel counts (valid, zero, non-finite, negative, out of range).
+        outside: Valid readings that fell outside the map window.
+        cells_updated: Map cells the frame wrote.
+    """
+
+    depth: DepthStats
+    outside: int
+    cells_updated: int
+
+
+@dataclass(frozen=True)
+class MapSnapshot:
+    """The map window as plain arrays, index ``[i, j]`` along world ``x`` and ``y``.
+
+    Attributes:
+        heights: Shape (N, N) [m]; NaN where unknown.
+        known: Shape (N, N).
+        origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
+        resolution: Cell side [m].
+    """
+
+    heights: npt.NDArray[np.float64]
+    known: npt.NDArray[np.bool_]
+    origin: tuple[float, float]
+    resolution: float
+
+    @property
+    def size(self) -> int:
+        """Cells per side."""
+        return self.heights.shape[0]
+
+    def cell_of(self, xy: npt.ArrayLike) -> npt.NDArray[np.int64]:
+        """Snapshot indices ``(i, j)`` of world points, shape (..., 2) (may be out of range)."""
+        p = np.asarray(xy, dtype=np.float64)
+        return np.floor((p - np.asarray(self.origin)) / self.resolution).astype(np.int64)
+
+    def centre_of(self, ij: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """World ``(x, y)`` of cell centres, shape (..., 2) [m]."""
+        return np.asarray(self.origin) + (np.asarray(ij, dtype=np.float64) + 0.5) * self.resolution
+
+    def centres(self) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """World x and y of every cell centre, each shape (N, N) [m]."""
+        c = (np.arange(self.size) + 0.5) * self.resolution
+        return np.meshgrid(self.origin[0] + c, self.origin[1] + c, indexing="ij")
+
+
+class HeightMap:
+    """A rolling 2.5-D height map in the world (map) frame.
+
+    Args:
+        config: Size, resolution and fusion rule.
+        centre: World ``(x, y)`` the window starts centred on [m].
+    """
+
+    def __init__(
+        self, config: HeightMapConfig | None = None, centre: tuple[float, float] = (0.0, 0.0)
+    ) -> None:
+        self.config = config or HeightMapConfig()
+        n = self.config.size
+        self._inv_res = 1.0 / self.config.resolution
+        self.heights = np.zeros((n, n), dtype=np.float64)
+        self.variance = np.zeros((n, n), dtype=np.float64)
+        self.known = np.zeros((n, n), dtype=bool)
+        self._frame_h = np.zeros((n, n), dtype=np.float64)
+        self._frame_r2 = np.zeros((n, n), dtype=np.float64)
+        self._stamp = np.zeros((n, n), dtype=np.int64)
+        self._touched = np.zeros(n * n, dtype=np.int64)
+        self._frame_id = 0
+        self.origin = self._origin_for(centre)
+
+    # Geometry -------------------------------------------------------------------------
+    def _origin_for(self, centre: tuple[float, float]) -> npt.NDArray[np.int64]:
+        cell = np.floor(np.asarray(centre, dtype=np.float64) * self._inv_res).astype(np.int64)
+        return cell - self.config.size // 2
+
+    def cell_of(self, xy: npt.ArrayLike) -> npt.NDArray[np.int64]:
+        """Global cell indices of world points, shape (..., 2)."""
+        return np.floor(np.asarray(xy, dtype=np.float64) * self._inv_res).astype(np.int64)
+
+    def centre_of(self, cell: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """World ``(x, y)`` of global cells' centres, shape (..., 2) [m]."""
+        return (np.asarray(cell, dtype=np.float64) + 0.5) * self.config.resolution
+
+    def buffer_index(self, cell: npt.ArrayLike) -> npt.NDArray[np.int64]:
+        """Buffer indices of global cells (wrap-around), shape (..., 2)."""
+        return np.mod(np.asarray(cell, dtype=np.int64), self.config.size)
+
+    def contains(self, cell: npt.ArrayLike) -> npt.NDArray[np.bool_]:
+        """Whether global cells lie inside the current window, shape (...)."""
+        offset = np.asarray(cell, dtype=np.int64) - self.origin
+        return np.all((offset >= 0) & (offset < self.config.size), axis=-1)
+
+    def height_at(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Mapped heights at world points [m], NaN where unknown or outside the window."""
+        cell = self.cell_of(xy)
+        inside = self.contains(cell)
+        idx = self.buffer_index(cell)
+        out = np.full(inside.shape, np.nan)
+        i, j = idx[..., 0][inside], idx[..., 1][inside]
+        known = self.known[i, j]
+        values = np.where(known, self.heights[i, j], np.nan)
+        out[inside] = values
+        return out
+
+    # Moving the window -----------------------------------------------------------------
+    def recentre(self, centre: tuple[float, float]) -> None:
+        """Move the window to be centred on a world point; cells that scroll out are erased."""
+        new_origin = self._origin_for(centre)
+        n = self.config.size
+        for axis in (0, 1):
+            shift = int(new_origin[axis] - self.origin[axis])
+            if shift == 0:
+                continue
+            if abs(shift) >= n:
+                self.known[:] = False
+                break
+            if shift > 0:  # cells [origin, origin + shift) leave
+                leaving = np.arange(self.origin[axis], self.origin[axis] + shift)
+            else:  # cells [new_origin + n, origin + n) leave
+                leaving = np.arange(new_origin[axis] + n, self.origin[axis] + n)
+            rows = np.mod(leaving, n)
+            if axis == 0:
+                self.known[rows, :] = False
+            else:
+                self.known[:, rows] = False
+        self.origin = new_origin
+
+    # Integration -----------------------------------------------------------------------
+    def _origin_code(self) -> npt.NDArray[np.int64]:
+        n = self.config.size
+        return np.array(
+            [self.origin[0], self.origin[1], self.origin[0] % n, self.origin[1] % n], dtype=np.int64
+        )
+
+    def _next_frame(self) -> int:
+        self._frame_id += 1
+        return self._frame_id
+
+    def _fuse(self, n_touched: int) -> None:
+        c = self.config
+        kernels.fuse(
+            self._touched,
+            n_touched,
+            self._frame_h,
+            self._frame_r2,
+            self.heights,
+            self.variance,
+            self.known,
+            _RULE_CODES[c.fusion],
+            c.range_noise,
+            c.process_noise,
+            c.gate,
+        )
+
+    def integrate_depth(
+        self,
+        depth: npt.ArrayLike,
+        camera: PinholeCamera,
+        camera_pose: Pose,
+        depth_scale: float | None = None,
+        stride: int = 1,
+    ) -> IntegrationStats:
+        """Add one depth image taken from ``camera_pose`` (the camera's pose in the world).
+
+        Args:
+            depth: Shape (height, width): float metres or unsigned integers with a scale.
+            camera: Intrinsics; the optical frame is x right, y down, z forward.
+            camera_pose: Pose of the optical frame in the world (the map frame, z up).
+            depth_scale: Metres per unit of integer depth.
+            stride: Use every ``stride``-th row and column.
+
+        Returns:
+            Pixel and cell counts.
+
+        Raises:
+            DepthImageError: On a malformed image.
+        """
+        d = camera.depth_in_metres(depth, depth_scale)
+        if stride < 1:
+            raise ConfigError(f"stride must be >= 1, got {stride}")
+        counts = np.zeros(kernels.N_COUNTS, dtype=np.int64)
+        n_touched = kernels.bin_depth(
+            d,
+            camera.scale_for(d, depth_scale),
+            stride,
+            camera.fx,
+            camera.fy,
+            camera.cx,
+            camera.cy,
+            camera.min_range,
+            camera.max_range,
+            camera_pose.rotation.as_matrix(),
+            camera_pose.position,
+            self._inv_res,
+            self._origin_code(),
+            self._frame_h,
+            self._frame_r2,
+            self._stamp,
+            self._next_frame(),
+            self._touched,
+            counts,
+        )
+        self._fuse(n_touched)
+        return self._stats(counts, n_touched)
+
+    def integrate_points(
+        self, points_in_world: npt.ArrayLike, sensor_position: npt.ArrayLike
+    ) -> IntegrationStats:
+        """Add a point cloud already in the world frame, seen from ``sensor_position``.
+
+        Args:
+            points_in_world: Shape (n, 3) [m]; non-finite points are counted and skipped.
+            sensor_position: Where the points were seen from, shape (3,) [m] (for ranges).
+        """
+        p = np.ascontiguousarray(points_in_world, dtype=np.float64)
+        if p.ndim != 2 or p.shape[1] != 3:
+            raise ConfigError(f"points must have shape (n, 3), got {p.shape}")
+        counts = np.zeros(kernels.N_COUNTS, dtype=np.int64)
+        n_touched = kernels.bin_points(
+            p,
+            np.asarray(sensor_position, dtype=np.float64),
+            self._inv_res,
+            self._origin_code(),
+            self._frame_h,
+            self._frame_r2,
+            self._stamp,
+            self._next_frame(),
+            self._touched,
+            counts,
+        )
+        self._fuse(n_touched)
+        return self._stats(counts, n_touched)
+
+    @staticmethod
+    def _stats(counts: npt.NDArray[np.int64], n_touched: int) -> IntegrationStats:
+        k = kernels
+        return IntegrationStats(
+            depth=DepthStats(
+                valid=int(counts[k.VALID] + counts[k.OUTSIDE]),
+                zero=int(counts[k.ZERO]),
+                non_finite=int(counts[k.NON_FINITE]),
+                negative=int(counts[k.NEGATIVE]),
+                out_of_range=int(counts[k.OUT_OF_RANGE]),
+            ),
+            outside=int(counts[k.OUTSIDE]),
+            cells_updated=int(n_touched),
+        )
+
+    # Views -------------------------------------------------------------------------------
+    def snapshot(self) -> MapSnapshot:
+        """The window as arrays ordered by world position (cell [0, 0] at the window corner)."""
+        shift = (-int(self.origin[0] % self.config.size), -int(self.origin[1] % self.config.size))
+        known = np.roll(self.known, shift, axis=(0, 1))
+        heights = np.where(known, np.roll(self.heights, shift, axis=(0, 1)), np.nan)
+        origin = (
+            float(self.origin[0] * self.config.resolution),
+            float(self.origin[1] * self.config.resolution),
+        )
+        return MapSnapshot(
+            heights=heights, known=known, origin=origin, resolution=self.config.resolution
+        )

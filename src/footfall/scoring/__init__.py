@@ -1,0 +1,1 @@
+"""Scoring: how walkable each cell of a height map is."""

@@ -1,0 +1,122 @@
+"""Walkability score map (thesis §6.2): slope plus edge proximity; lower is better.
+
+- Slope (eqs. 6.1-6.3): the Sobel operator in physical units, the magnitude of the height
+  gradient as rise over run: ``S_g = C_g * |grad h|``, with ``G = sobel / (8 * res)``.
+- Edge proximity (eq. 6.4): ``S_p = C_p * |sum(K * (h_ij - h_xy))| / n^2`` over the n x n
+  window around the cell, ``K`` a Gaussian with peak 1. A uniform slope cancels (K is
+  symmetric); a ledge, a box edge or a hole rim does not, and the rejected band grows
+  with the height difference.
+
+A cell is valid when it is known, every cell its kernel reaches is known (and inside
+the map), and ``S_g + S_p`` is below the threshold. Defaults reproduce thesis
+Figs. 6.6-6.8 on the course terrain: box tops, the ramp and the floor valid; box edges,
+the hole rim, the pillar's and the pedestal's sides invalid.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.errors import ConfigError
+from footfall.mapping.height_map import MapSnapshot
+from footfall.scoring import kernels
+
+
+@dataclass(frozen=True)
+class ScoreConfig:
+    """Score parameters.
+
+    Attributes:
+        slope_weight: ``C_g``, per unit of rise over run.
+        proximity_weight: ``C_p`` [1/m].
+        kernel_size: ``n``, side of the proximity window [cells]; odd.
+        kernel_sigma: Standard deviation of the Gaussian ``K`` [cells].
+        threshold: Cells scoring at or above this are invalid.
+    """
+
+    slope_weight: float = 1.0
+    proximity_weight: float = 200.0
+    kernel_size: int = 7
+    kernel_sigma: float = 2.0
+    threshold: float = 0.5
+
+    def __post_init__(self) -> None:
+        if self.kernel_size < 3 or self.kernel_size % 2 == 0:
+            raise ConfigError(f"kernel_size must be odd and >= 3, got {self.kernel_size}")
+        if not (self.kernel_sigma > 0 and self.threshold > 0):
+            raise ConfigError("kernel_sigma and threshold must be positive")
+        if self.slope_weight < 0 or self.proximity_weight < 0:
+            raise ConfigError("score weights must be >= 0")
+
+    @property
+    def kernel_1d(self) -> npt.NDArray[np.float64]:
+        """One axis of the separable Gaussian kernel, peak 1, shape (n,)."""
+        k = np.arange(self.kernel_size) - self.kernel_size // 2
+        return np.exp(-0.5 * (k / self.kernel_sigma) ** 2)
+
+
+@dataclass(frozen=True)
+class ScoreMap:
+    """Scores of a map window, index ``[i, j]`` along world ``x`` and ``y``.
+
+    Attributes:
+        slope: Height gradient magnitude, rise over run; NaN where unknown.
+        proximity: Edge proximity ``|sum(K (h_ij - h_xy))| / n^2`` [m]; NaN where unknown.
+        score: ``C_g * slope + C_p * proximity``; NaN where unknown.
+        valid: Cells a foot may use.
+        origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
+        resolution: Cell side [m].
+    """
+
+    slope: npt.NDArray[np.float64]
+    proximity: npt.NDArray[np.float64]
+    score: npt.NDArray[np.float64]
+    valid: npt.NDArray[np.bool_]
+    origin: tuple[float, float]
+    resolution: float
+
+
+def score_heights(
+    heights: npt.ArrayLike, resolution: float, config: ScoreConfig | None = None
+) -> tuple[
+    npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.bool_]
+]:
+    """Slope, proximity, total score and validity of a height grid.
+
+    Args:
+        heights: Shape (N, M) [m]; NaN marks unknown cells.
+        resolution: Cell side [m].
+        config: Score parameters.
+
+    Returns:
+        ``(slope, proximity, score, valid)``, each shape (N, M).
+    """
+    c = config or ScoreConfig()
+    h = np.asarray(heights, dtype=np.float64)
+    known = np.isfinite(h)
+    h0 = np.where(known, h, 0.0)
+    slope, proximity, score = (np.empty_like(h0) for _ in range(3))
+    valid = np.empty(h0.shape, dtype=bool)
+    kernels.score_grid(
+        h0,
+        known,
+        1.0 / (8.0 * resolution),
+        c.kernel_1d,
+        c.slope_weight,
+        c.proximity_weight,
+        c.threshold,
+        slope,
+        proximity,
+        score,
+        valid,
+    )
+    return slope, proximity, score, valid
+
+
+def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> ScoreMap:
+    """Score a height-map snapshot."""
+    slope, proximity, score, valid = score_heights(snapshot.heights, snapshot.resolution, config)
+    return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)

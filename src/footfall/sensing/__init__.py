@@ -1,0 +1,1 @@
+"""Sensing: camera models, poses and pose-estimate noise."""

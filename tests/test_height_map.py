@@ -1,0 +1,154 @@
+"""Rolling height map: cell transforms, scrolling, integration and fusion."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from footfall.benchmarking import synthetic_depth_frame
+from footfall.mapping.height_map import HeightMap, HeightMapConfig
+from footfall.mapping.reference import integrate_depth_latest
+
+coordinates = st.floats(-500.0, 500.0, allow_nan=False)
+
+
+@given(
+    coordinates, coordinates, st.sampled_from([0.01, 0.02, 0.05]), st.sampled_from([16, 128, 256])
+)
+@settings(max_examples=200, deadline=None)
+def test_world_cell_world_round_trip(x, y, resolution, size):
+    """A point lies in its cell; the cell's centre maps back to that cell; buffer indices wrap."""
+    m = HeightMap(HeightMapConfig(size=size, resolution=resolution), centre=(x, y))
+    cell = m.cell_of([x, y])
+    centre = m.centre_of(cell)
+    assert np.all(np.abs(centre - [x, y]) <= 0.5 * resolution + 1e-9)
+    np.testing.assert_array_equal(m.cell_of(centre), cell)
+    np.testing.assert_array_equal(m.buffer_index(cell), np.mod(cell, size))
+    assert m.contains(cell)  # the window is centred on the point
+    assert not m.contains(cell + [size, 0]) and not m.contains(cell - [0, size])
+
+
+def _fill(m: HeightMap, rng: np.random.Generator, centre: np.ndarray) -> None:
+    """Write random heights over the whole window around ``centre``."""
+    res = m.config.resolution
+    n = m.config.size
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    xy = (m.origin + np.stack([i.ravel(), j.ravel()], 1) + 0.5) * res
+    pts = np.column_stack([xy, rng.uniform(-1, 1, len(xy))])
+    m.integrate_points(pts, np.append(centre, 1.0))
+
+
+@given(st.integers(0, 2**32 - 1))
+@settings(max_examples=15, deadline=None)
+def test_scrolling_keeps_cells_still_in_the_window(seed):
+    """Scrolling 50 m in random directions: cells that stay in the window keep their data,
+    cells that scroll in are unknown."""
+    rng = np.random.default_rng(seed)
+    m = HeightMap(HeightMapConfig(size=64, resolution=0.05))
+    position = np.zeros(2)
+    _fill(m, rng, position)
+    travelled = 0.0
+    while travelled < 50.0:
+        before_origin = m.origin.copy()
+        before = m.snapshot()
+        step = rng.uniform(0.02, 1.5) * np.array(
+            [np.cos(a := rng.uniform(0, 2 * np.pi)), np.sin(a)]
+        )
+        position = position + step
+        travelled += float(np.linalg.norm(step))
+        m.recentre(tuple(position))
+        after = m.snapshot()
+        shift = m.origin - before_origin
+        n = m.config.size
+        for i in range(0, n, 7):
+            for j in range(0, n, 5):
+                old = np.array([i, j]) + shift  # the same global cell in the old snapshot
+                if np.all((old >= 0) & (old < n)):
+                    assert after.known[i, j] == before.known[old[0], old[1]]
+                    if after.known[i, j]:
+                        assert after.heights[i, j] == before.heights[old[0], old[1]]
+                else:
+                    assert not after.known[i, j]
+        if rng.uniform() < 0.3:
+            _fill(m, rng, position)
+
+
+def test_jump_beyond_the_map_clears_it():
+    """A pose that jumps farther than the map recentres it empty, without error."""
+    m = HeightMap(HeightMapConfig(size=32, resolution=0.1))
+    m.integrate_points([[0.0, 0.0, 1.0]], [0, 0, 2])
+    m.recentre((1000.0, -1000.0))
+    assert not m.known.any()
+    m.integrate_points([[1000.0, -1000.0, 0.5]], [1000, -1000, 2])
+    assert m.height_at([[1000.0, -1000.0]])[0] == 0.5
+
+
+def test_compiled_update_matches_numpy_reference():
+    """The numba kernel and the plain-NumPy reference build the same map from a frame."""
+    depth, camera, pose = synthetic_depth_frame(np.random.default_rng(1))
+    config = HeightMapConfig(size=128, resolution=0.02)
+    m = HeightMap(config, centre=(1.0, 0.3))
+    m.integrate_depth(depth, camera, pose)
+    heights = np.zeros((128, 128))
+    known = np.zeros((128, 128), dtype=bool)
+    integrate_depth_latest(heights, known, tuple(m.origin), config.resolution, depth, camera, pose)
+    np.testing.assert_array_equal(m.known, known)
+    np.testing.assert_allclose(m.heights[known], heights[known], atol=1e-12)
+
+
+def test_invalid_readings_never_overwrite_known_cells():
+    """A frame of NaN, zero and negative depth changes nothing and is counted."""
+    depth, camera, pose = synthetic_depth_frame(np.random.default_rng(2))
+    m = HeightMap(HeightMapConfig(size=128), centre=(1.0, 0.0))
+    m.integrate_depth(depth, camera, pose)
+    heights, known = m.heights.copy(), m.known.copy()
+    bad = np.full_like(depth, np.nan)
+    bad[::2] = 0.0
+    bad[::3] = -1.0
+    stats = m.integrate_depth(bad, camera, pose)
+    assert stats.depth.valid == 0 and stats.depth.dropped == depth.size
+    np.testing.assert_array_equal(m.known, known)
+    np.testing.assert_array_equal(m.heights, heights)
+
+
+def test_points_outside_the_map_are_counted():
+    """Points beyond the window are ignored and counted; non-finite points too."""
+    m = HeightMap(HeightMapConfig(size=16, resolution=0.1))
+    stats = m.integrate_points([[0.1, 0.1, 0.2], [50.0, 0.0, 0.3], [np.nan, 0.0, 0.0]], [0, 0, 1])
+    assert (stats.depth.valid, stats.outside, stats.depth.non_finite) == (2, 1, 1)
+    assert m.known.sum() == 1
+
+
+def test_within_a_frame_the_highest_point_wins():
+    """Several points in one cell in one frame: the cell takes the highest."""
+    m = HeightMap(HeightMapConfig(size=16, resolution=0.1))
+    m.integrate_points([[0.05, 0.05, 0.1], [0.06, 0.04, 0.3], [0.07, 0.02, 0.2]], [0, 0, 1])
+    assert m.height_at([[0.05, 0.05]])[0] == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize(("rule", "expected"), [("latest", 0.1), ("max", 0.5)])
+def test_fusion_rules_across_frames(rule, expected):
+    """Latest replaces; max keeps the highest seen."""
+    m = HeightMap(HeightMapConfig(size=16, resolution=0.1, fusion=rule))
+    for z in (0.2, 0.5, 0.1):
+        m.integrate_points([[0.05, 0.05, z]], [0, 0, 1])
+    assert m.height_at([[0.05, 0.05]])[0] == pytest.approx(expected)
+
+
+def test_variance_fusion_averages_noise_and_follows_changes():
+    """The variance rule averages noisy readings of a still surface, and a jump larger than
+    its gate replaces the estimate."""
+    rng = np.random.default_rng(0)
+    m = HeightMap(
+        HeightMapConfig(
+            size=16, resolution=0.1, fusion="variance", range_noise=0.01, process_noise=0.0
+        )
+    )
+    readings = 0.2 + rng.normal(0.0, 0.01, 200)
+    for z in readings:
+        m.integrate_points([[0.05, 0.05, z]], [0.05, 0.05, 1.2])  # range 1 m -> sigma 1 cm
+    assert abs(m.height_at([[0.05, 0.05]])[0] - 0.2) < 0.003
+    m.integrate_points([[0.05, 0.05, 0.6]], [0.05, 0.05, 1.6])
+    assert m.height_at([[0.05, 0.05]])[0] == pytest.approx(0.6)

@@ -1,0 +1,82 @@
+"""Terrains: the MuJoCo geometry matches each ground-truth height function."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from footfall.errors import ConfigError
+from footfall.robot.spec import load_spec
+from footfall.sim.hexapod import MujocoHexapod
+from footfall.sim.model import ROBOT_GEOM_GROUP
+from footfall.sim.terrain import Cobblestones, Stairs, make_terrain
+
+
+def _ray_heights(sim: MujocoHexapod, xy: np.ndarray) -> np.ndarray:
+    """Height of the simulated ground under each point, by casting rays down (robot excluded)."""
+    groups = np.ones(6, dtype=np.uint8)
+    groups[ROBOT_GEOM_GROUP] = 0
+    geom = np.zeros(1, dtype=np.int32)
+    out = []
+    for x, y in xy:
+        distance = mujoco.mj_ray(
+            sim.model,
+            sim.data,
+            np.array([x, y, 2.0]),
+            np.array([0.0, 0.0, -1.0]),
+            groups,
+            1,
+            -1,
+            geom,
+        )
+        out.append(2.0 - distance)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("name", ["flat", "stairs", "cobblestones", "course"])
+def test_simulated_ground_matches_ground_truth(name):
+    """Away from walls the simulated surface is the terrain's height function (to 2 mm)."""
+    terrain = make_terrain(name, seed=4)
+    sim = MujocoHexapod(load_spec("default"), terrain)
+    rng = np.random.default_rng(0)
+    xy = np.column_stack([rng.uniform(-0.3, 3.2, 400), rng.uniform(-0.8, 0.8, 400)])
+    # Keep points whose neighbourhood is free of walls (the height field smooths them).
+    near = [
+        terrain.height(xy[:, 0] + dx, xy[:, 1] + dy)
+        for dx in (-0.02, 0, 0.02)
+        for dy in (-0.02, 0, 0.02)
+    ]
+    flat_around = np.ptp(np.stack(near), axis=0) < 0.01
+    heights = _ray_heights(sim, xy[flat_around])
+    np.testing.assert_allclose(
+        heights, terrain.height(xy[flat_around, 0], xy[flat_around, 1]), atol=0.002
+    )
+    assert flat_around.sum() > 100
+
+
+def test_stairs_go_up_then_down():
+    """The staircase rises by `rise` per tread to steps * rise and comes back down."""
+    stairs = Stairs(rise=0.05, tread=0.2, steps=3, landing=0.4, start_x=0.5)
+    xs = np.arange(0.0, stairs.end_x + 0.5, 0.01)
+    profile = stairs.height(xs, 0.0)
+    assert profile.max() == pytest.approx(0.15)
+    assert set(np.round(np.unique(profile), 6)) == {0.0, 0.05, 0.1, 0.15}
+    assert profile[0] == 0 and profile[-1] == 0
+    assert stairs.goal[0] > stairs.end_x
+
+
+def test_cobblestones_are_seeded():
+    """The same seed lays the same stones; another seed differs; grooves are at floor level."""
+    a, b, c = Cobblestones(seed=1), Cobblestones(seed=1), Cobblestones(seed=2)
+    xs, ys = np.meshgrid(np.linspace(0.6, 3.0, 97), np.linspace(-0.6, 0.6, 49))
+    np.testing.assert_array_equal(a.height(xs, ys), b.height(xs, ys))
+    assert not np.array_equal(a.height(xs, ys), c.height(xs, ys))
+    groove_x = a.start_x + a.stone  # a groove between the first two rows of stones
+    assert np.all(a.height(np.full(5, groove_x), np.linspace(-0.5, 0.5, 5)) == 0.0)
+
+
+def test_unknown_terrain_names_the_choices():
+    """An unknown terrain lists the known ones."""
+    with pytest.raises(ConfigError, match="flat, stairs, cobblestones, course"):
+        make_terrain("lava")

@@ -1,0 +1,111 @@
+"""Walkability scores: the Sobel slope, the edge-proximity score, validity."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from footfall.scoring.reference import score_grid_numpy
+from footfall.scoring.walkability import ScoreConfig, score_heights
+from footfall.sim.terrain import Course
+
+CONFIG = ScoreConfig()
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(8, 40), st.integers(8, 40), st.floats(0.0, 0.3))
+@settings(max_examples=60, deadline=None)
+def test_compiled_scores_match_numpy_reference(seed, rows, cols, unknown_fraction):
+    """The numba kernel equals the plain-NumPy definition, unknown cells included."""
+    rng = np.random.default_rng(seed)
+    h = rng.normal(0.0, 0.05, (rows, cols))
+    h[rng.uniform(size=h.shape) < unknown_fraction] = np.nan
+    ours = score_heights(h, 0.02, CONFIG)
+    ref = score_grid_numpy(
+        h, 0.02, CONFIG.kernel_1d, CONFIG.slope_weight, CONFIG.proximity_weight, CONFIG.threshold
+    )
+    for a, b in zip(ours[:3], ref[:3], strict=True):
+        np.testing.assert_allclose(a, b, atol=1e-12, equal_nan=True)
+    np.testing.assert_array_equal(ours[3], ref[3])
+
+
+@given(st.floats(-0.6, 0.6), st.floats(-0.6, 0.6))
+@settings(max_examples=50, deadline=None)
+def test_uniform_ramp_has_its_slope_and_no_proximity(gx, gy):
+    """On a plane the Sobel slope is the gradient (rise over run) and proximity vanishes."""
+    res = 0.02
+    i, j = np.meshgrid(np.arange(30), np.arange(30), indexing="ij")
+    h = gx * i * res + gy * j * res
+    slope, proximity, _, _ = score_heights(h, res, CONFIG)
+    inner = (slice(5, -5), slice(5, -5))
+    np.testing.assert_allclose(slope[inner], np.hypot(gx, gy), atol=1e-9)
+    np.testing.assert_allclose(proximity[inner], 0.0, atol=1e-12)
+
+
+def test_step_edge_is_invalid_and_far_cells_valid():
+    """Cells next to a 5 cm step are invalid on both sides; cells far from it are valid."""
+    h = np.zeros((40, 40))
+    h[20:, :] = 0.05
+    _, _, _, valid = score_heights(h, 0.02, CONFIG)
+    assert not valid[18:22, 10].any()
+    assert valid[10, 10] and valid[30, 10]
+
+
+def test_cells_near_unknown_are_invalid():
+    """A cell whose kernel window reaches an unknown cell, or the map border, is invalid."""
+    h = np.zeros((40, 40))
+    h[20, 20] = np.nan
+    _, _, score, valid = score_heights(h, 0.02, CONFIG)
+    half = CONFIG.kernel_size // 2
+    assert np.isnan(score[20, 20])
+    assert not valid[20 - half : 21 + half, 20 - half : 21 + half].any()
+    assert valid[20 - half - 1, 20] and valid[20, 20 + half + 1]
+    assert not valid[:half, :].any() and not valid[:, -half:].any()
+    assert valid[half, 10]
+
+
+def _course_scores(resolution: float = 0.02):
+    course = Course()
+    xs = np.arange(-0.2, 3.0, resolution) + resolution / 2
+    ys = np.arange(-1.0, 1.0, resolution) + resolution / 2
+    h = course.height(xs[:, None], ys[None, :])
+    _, _, _, valid = score_heights(h, resolution, CONFIG)
+    return xs, ys, valid
+
+
+@pytest.mark.parametrize(
+    ("where", "x", "y", "expected"),
+    [
+        ("box top", 0.9, 0.46, True),
+        ("box edge", 0.9 - 0.13, 0.46, False),
+        ("ramp middle", 1.6, 0.48, True),
+        ("ramp low end", 1.42, 0.48, True),
+        ("sloped pillar top", 2.35, 0.52, True),
+        ("sloped pillar side", 2.35 + 0.14, 0.52, False),
+        ("round pedestal top", 1.6, -0.5, True),
+        ("round pedestal shoulder", 1.6 + 0.13, -0.5, False),
+        ("tall box top", 2.3, -0.5, True),
+        ("tall box edge", 2.3 - 0.11, -0.5, False),
+        ("hole bottom", 0.9, -0.5, True),
+        ("hole wall", 0.9 + 0.14, -0.5, False),
+        ("hole rim", 0.9 + 0.19, -0.5, False),
+        ("lane", 1.5, 0.0, True),
+    ],
+)
+def test_course_features_score_as_in_thesis_figures(where, x, y, expected):
+    """Thesis Figs. 6.6-6.8: box tops, ramp, pillar top, hole bottom valid; edges, rims and
+    steep sides invalid (scored on the course's true surface)."""
+    xs, ys, valid = _course_scores()
+    i, j = int(np.argmin(np.abs(xs - x))), int(np.argmin(np.abs(ys - y)))
+    assert bool(valid[i, j]) is expected, where
+
+
+def test_bad_score_config_is_refused():
+    """An even kernel or a non-positive threshold raise."""
+    from footfall.errors import ConfigError
+
+    with pytest.raises(ConfigError):
+        ScoreConfig(kernel_size=6)
+    with pytest.raises(ConfigError):
+        ScoreConfig(threshold=0.0)
