@@ -48,7 +48,7 @@ def test_step_edge_is_invalid_and_far_cells_valid():
     h = np.zeros((40, 40))
     h[20:, :] = 0.05
     _, _, _, valid = score_heights(h, 0.02, CONFIG)
-    assert not valid[18:22, 10].any()
+    assert not valid[19:21, 10].any()
     assert valid[10, 10] and valid[30, 10]
 
 
@@ -88,7 +88,7 @@ def _course_scores(resolution: float = 0.02):
         ("tall box top", 2.3, -0.5, True),
         ("tall box edge", 2.3 - 0.11, -0.5, False),
         ("hole bottom", 0.9, -0.5, True),
-        ("hole wall", 0.9 + 0.14, -0.5, False),
+        ("hole wall", 0.9 + 0.15, -0.5, False),
         ("hole rim", 0.9 + 0.19, -0.5, False),
         ("lane", 1.5, 0.0, True),
     ],

@@ -63,6 +63,7 @@ def run_control_loop(
     seconds: float,
     control_rate_hz: float = 100.0,
     on_tick: Callable[[float], None] | None = None,
+    stop: Callable[[WalkLog], bool] | None = None,
 ) -> WalkLog:
     """Drive ``backend`` with ``controller`` for ``seconds`` at a fixed rate.
 
@@ -72,7 +73,8 @@ def run_control_loop(
         command: A fixed command, or a function of controller time returning one.
         seconds: Duration [s].
         control_rate_hz: Control rate [Hz].
-        on_tick: Called with the controller time after every tick (progress display).
+        on_tick: Called with the controller time after every tick (sensing, progress).
+        stop: Ends the loop early when it returns True for the log so far.
 
     Returns:
         The record of the run.
@@ -80,10 +82,11 @@ def run_control_loop(
     dt = 1.0 / control_rate_hz
     log = WalkLog()
     unknown3 = np.full(3, np.nan)
+    state = backend.read()
     for k in range(round(seconds * control_rate_hz)):
         t = k * dt
         current = command(t) if callable(command) else command
-        targets = controller.update(t, current)
+        targets = controller.update(t, current, state)
         backend.command(targets)
         backend.advance(dt)
         state = backend.read()
@@ -112,4 +115,6 @@ def run_control_loop(
         log.state.append(controller.state.value)
         if on_tick is not None:
             on_tick(t + dt)
+        if stop is not None and stop(log):
+            break
     return log

@@ -105,6 +105,9 @@ class MapSnapshot:
     Attributes:
         heights: Shape (N, N) [m]; NaN where unknown.
         known: Shape (N, N).
+        spread: Height range of the points in each cell in its latest frame, shape (N, N)
+            [m]; NaN where unknown. A cell that straddles an edge or a narrow groove has a
+            large spread even when its height looks flat.
         origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
         resolution: Cell side [m].
     """
@@ -113,6 +116,7 @@ class MapSnapshot:
     known: npt.NDArray[np.bool_]
     origin: tuple[float, float]
     resolution: float
+    spread: npt.NDArray[np.float64] | None = None
 
     @property
     def size(self) -> int:
@@ -151,7 +155,9 @@ class HeightMap:
         self.heights = np.zeros((n, n), dtype=np.float64)
         self.variance = np.zeros((n, n), dtype=np.float64)
         self.known = np.zeros((n, n), dtype=bool)
+        self.spread = np.zeros((n, n), dtype=np.float64)
         self._frame_h = np.zeros((n, n), dtype=np.float64)
+        self._frame_lo = np.zeros((n, n), dtype=np.float64)
         self._frame_r2 = np.zeros((n, n), dtype=np.float64)
         self._stamp = np.zeros((n, n), dtype=np.int64)
         self._touched = np.zeros(n * n, dtype=np.int64)
@@ -232,8 +238,10 @@ class HeightMap:
             self._touched,
             n_touched,
             self._frame_h,
+            self._frame_lo,
             self._frame_r2,
             self.heights,
+            self.spread,
             self.variance,
             self.known,
             _RULE_CODES[c.fusion],
@@ -284,6 +292,7 @@ class HeightMap:
             self._inv_res,
             self._origin_code(),
             self._frame_h,
+            self._frame_lo,
             self._frame_r2,
             self._stamp,
             self._next_frame(),
@@ -312,6 +321,7 @@ class HeightMap:
             self._inv_res,
             self._origin_code(),
             self._frame_h,
+            self._frame_lo,
             self._frame_r2,
             self._stamp,
             self._next_frame(),
@@ -342,10 +352,15 @@ class HeightMap:
         shift = (-int(self.origin[0] % self.config.size), -int(self.origin[1] % self.config.size))
         known = np.roll(self.known, shift, axis=(0, 1))
         heights = np.where(known, np.roll(self.heights, shift, axis=(0, 1)), np.nan)
+        spread = np.where(known, np.roll(self.spread, shift, axis=(0, 1)), np.nan)
         origin = (
             float(self.origin[0] * self.config.resolution),
             float(self.origin[1] * self.config.resolution),
         )
         return MapSnapshot(
-            heights=heights, known=known, origin=origin, resolution=self.config.resolution
+            heights=heights,
+            known=known,
+            origin=origin,
+            resolution=self.config.resolution,
+            spread=spread,
         )

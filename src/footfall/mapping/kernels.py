@@ -22,9 +22,22 @@ FUSE_LATEST, FUSE_MAX, FUSE_VARIANCE = 0, 1, 2
 
 @njit(cache=True)
 def _bin_point(
-    wx, wy, wz, r2, inv_res, origin, n, frame_h, frame_r2, stamp, frame_id, touched, n_touched
+    wx,
+    wy,
+    wz,
+    r2,
+    inv_res,
+    origin,
+    n,
+    frame_h,
+    frame_lo,
+    frame_r2,
+    stamp,
+    frame_id,
+    touched,
+    n_touched,
 ):
-    """Keep the point in its cell's frame maximum.
+    """Keep the point in its cell's frame maximum (and minimum).
 
     Returns the new touched count, or -1 when the point lies outside the window.
     """
@@ -42,12 +55,15 @@ def _bin_point(
     if stamp[bi, bj] != frame_id:
         stamp[bi, bj] = frame_id
         frame_h[bi, bj] = wz
+        frame_lo[bi, bj] = wz
         frame_r2[bi, bj] = r2
         touched[n_touched] = bi * n + bj
         n_touched += 1
     else:
         if wz > frame_h[bi, bj]:
             frame_h[bi, bj] = wz
+        if wz < frame_lo[bi, bj]:
+            frame_lo[bi, bj] = wz
         if r2 < frame_r2[bi, bj]:
             frame_r2[bi, bj] = r2
     return n_touched
@@ -69,6 +85,7 @@ def bin_depth(
     inv_res,
     origin,
     frame_h,
+    frame_lo,
     frame_r2,
     stamp,
     frame_id,
@@ -123,12 +140,15 @@ def bin_depth(
             if stamp[bi, bj] != frame_id:
                 stamp[bi, bj] = frame_id
                 frame_h[bi, bj] = wz
+                frame_lo[bi, bj] = wz
                 frame_r2[bi, bj] = r2
                 touched[n_touched] = bi * n + bj
                 n_touched += 1
             else:
                 if wz > frame_h[bi, bj]:
                     frame_h[bi, bj] = wz
+                if wz < frame_lo[bi, bj]:
+                    frame_lo[bi, bj] = wz
                 if r2 < frame_r2[bi, bj]:
                     frame_r2[bi, bj] = r2
             valid += 1
@@ -139,7 +159,7 @@ def bin_depth(
 
 @njit(cache=True)
 def bin_points(
-    points, sensor, inv_res, origin, frame_h, frame_r2, stamp, frame_id, touched, counts
+    points, sensor, inv_res, origin, frame_h, frame_lo, frame_r2, stamp, frame_id, touched, counts
 ):
     """Keep each cell's highest world point; non-finite points are counted and skipped."""
     n = frame_h.shape[0]
@@ -159,6 +179,7 @@ def bin_points(
             origin,
             n,
             frame_h,
+            frame_lo,
             frame_r2,
             stamp,
             frame_id,
@@ -178,8 +199,10 @@ def fuse(
     touched,
     n_touched,
     frame_h,
+    frame_lo,
     frame_r2,
     heights,
+    spread,
     variance,
     known,
     rule,
@@ -199,6 +222,7 @@ def fuse(
         i = touched[k] // n
         j = touched[k] % n
         z = frame_h[i, j]
+        spread[i, j] = z - frame_lo[i, j]  # latest frame's height range inside the cell
         if not known[i, j]:
             heights[i, j] = z
             s = range_noise * frame_r2[i, j]

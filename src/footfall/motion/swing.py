@@ -21,6 +21,7 @@ second time (Figs. 5.18-5.19), unlike a polynomial restarted from the ground (Fi
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -56,6 +57,21 @@ class SwingTrajectory(Protocol):
     def retarget(self, target: npt.ArrayLike, t: float) -> None:
         """Move the touchdown target at time ``t`` [s]; the path stays continuous."""
         ...
+
+    @property
+    def start(self) -> npt.NDArray[np.float64]:
+        """Lift-off position, shape (3,) [m]."""
+        ...
+
+    def transform(
+        self, rotation: npt.NDArray[np.float64], translation: npt.NDArray[np.float64]
+    ) -> None:
+        """Move the whole swing by a planar rigid transform (2x2 rotation, 2-vector) [m]."""
+        ...
+
+
+# A function giving the terrain height under horizontal points, shape (n, 2) -> (n,) [m].
+TerrainFunction = Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float64]]
 
 
 @dataclass(frozen=True)
@@ -190,6 +206,55 @@ def cap_height(path: npt.NDArray[np.float64], ceiling: float) -> npt.NDArray[np.
     return capped
 
 
+def raise_over(
+    path: npt.NDArray[np.float64],
+    terrain: TerrainFunction,
+    clearance: float,
+    end_radius: float = 0.03,
+) -> npt.NDArray[np.float64]:
+    """Lift a path so it clears the terrain under it by ``clearance``.
+
+    This is the draft's collision check of the swing motion.
+    The rise of the path over the straight line between its ends is scaled up just enough;
+    points within ``end_radius`` horizontally of either end stand over the footholds
+    themselves and are not checked.
+
+    Args:
+        path: Polyline, shape (n, 3) [m].
+        terrain: Terrain height under horizontal points [m].
+        clearance: Least height of the path above the terrain [m].
+        end_radius: Horizontal radius around the ends left unchecked [m].
+
+    Returns:
+        The lifted path (the input itself when it already clears), shape (n, 3) [m].
+    """
+    start, end = path[0, :2], path[-1, :2]
+    far = (np.linalg.norm(path[:, :2] - start, axis=1) > end_radius) & (
+        np.linalg.norm(path[:, :2] - end, axis=1) > end_radius
+    )
+    if not far.any():
+        return path
+    need = terrain(path[far, :2]) + clearance
+    if np.all(path[far, 2] >= need):
+        return path
+    horizontal = np.linalg.norm(path[:, :2] - start, axis=1)
+    total = horizontal[-1]
+    fraction = horizontal / total if total > 1e-12 else np.linspace(0.0, 1.0, len(path))
+    base = path[0, 2] + fraction * (path[-1, 2] - path[0, 2])
+    excess = path[:, 2] - base
+    lift = np.maximum(need - base[far], 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(excess[far] > 1e-6, lift / excess[far], np.inf)
+    k = float(np.max(scale[lift > 0], initial=1.0))
+    raised = path.copy()
+    if np.isfinite(k):
+        raised[:, 2] = base + max(k, 1.0) * excess
+    else:  # part of the path runs along the straight line: add a smooth bump instead
+        bump = np.sin(np.pi * fraction)
+        raised[:, 2] = path[:, 2] + float(np.max(lift)) * bump
+    return raised
+
+
 class _PolylineSwing:
     """Shared time-scaling of a swing along a polyline that is replaced on re-targeting.
 
@@ -205,6 +270,19 @@ class _PolylineSwing:
         self._path = np.zeros((1, 3))
         self._arclength = np.zeros(1)
         self._s_at_path_start = 0.0
+        self._start = np.zeros(3)
+
+    @property
+    def start(self) -> npt.NDArray[np.float64]:
+        """Lift-off position, shape (3,) [m]."""
+        return self._start.copy()
+
+    def transform(
+        self, rotation: npt.NDArray[np.float64], translation: npt.NDArray[np.float64]
+    ) -> None:
+        """Move the whole swing by a planar rigid transform."""
+        self._path[:, :2] = self._path[:, :2] @ np.asarray(rotation).T + translation
+        self._start[:2] = np.asarray(rotation) @ self._start[:2] + translation
 
     def _set_path(self, path: npt.NDArray[np.float64], t: float) -> None:
         seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
@@ -242,20 +320,44 @@ class FlowSwing(_PolylineSwing):
         target: Touchdown target in the world frame, shape (3,) [m].
         duration: Swing duration [s].
         config: Flow parameters.
+        terrain: Terrain height under horizontal points; when given, the path is lifted to
+            clear it by ``clearance`` (see :func:`raise_over`).
+        clearance: Least height of the path (foot centre) above the terrain [m].
     """
 
     def __init__(
-        self, start: npt.ArrayLike, target: npt.ArrayLike, duration: float, config: FlowConfig
+        self,
+        start: npt.ArrayLike,
+        target: npt.ArrayLike,
+        duration: float,
+        config: FlowConfig,
+        terrain: TerrainFunction | None = None,
+        clearance: float = 0.0,
     ) -> None:
         super().__init__(duration)
         self.config = config
-        self._lift_off_height = float(np.asarray(start, dtype=np.float64)[2])
-        self._set_path(integrate_flow(start, target, config), 0.0)
+        self._terrain = terrain
+        self._clearance = clearance
+        self._start = np.asarray(start, dtype=np.float64).copy()
+        self._lift_off_height = float(self._start[2])
+        self._set_path(self._plan(self._start, target), 0.0)
+
+    def _plan(self, here: npt.ArrayLike, target: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        path = integrate_flow(here, target, self.config, self._lift_off_height)
+        if self._terrain is not None:
+            path = raise_over(path, self._terrain, self._clearance)
+            if self.config.max_height is not None:
+                # Clearance never lifts the foot beyond the leg's workspace.
+                top = (
+                    max(self._lift_off_height, float(np.asarray(target)[2]))
+                    + self.config.max_height
+                )
+                path = cap_height(path, top)
+        return path
 
     def retarget(self, target: npt.ArrayLike, t: float) -> None:
         """Follow the field from the foot's position at ``t`` to a new target."""
-        path = integrate_flow(self.position(t), target, self.config, self._lift_off_height)
-        self._set_path(path, t)
+        self._set_path(self._plan(self.position(t), target), t)
 
 
 def polynomial_arc_coefficients(
@@ -309,7 +411,23 @@ class PolynomialArcSwing:
         self.duration = duration
         self.apex_height = apex_height
         self._t0 = 0.0
-        self._fit(np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64), 0.0)
+        self._start = np.asarray(start, dtype=np.float64).copy()
+        self._fit(self._start, np.asarray(target, dtype=np.float64), 0.0)
+
+    @property
+    def start(self) -> npt.NDArray[np.float64]:
+        """Lift-off position, shape (3,) [m]."""
+        return self._start.copy()
+
+    def transform(
+        self, rotation: npt.NDArray[np.float64], translation: npt.NDArray[np.float64]
+    ) -> None:
+        """Move the whole swing by a planar rigid transform."""
+        r = np.asarray(rotation)
+        self._coefficients[:, :2] = self._coefficients[:, :2] @ r.T
+        self._coefficients[0, :2] += translation
+        self._target[:2] = r @ self._target[:2] + translation
+        self._start[:2] = r @ self._start[:2] + translation
 
     def _fit(
         self, start: npt.NDArray[np.float64], target: npt.NDArray[np.float64], t0: float

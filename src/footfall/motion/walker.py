@@ -22,11 +22,13 @@ down) and reports why.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
+from scipy.spatial.transform import Rotation
 
 from footfall.errors import SingularConfigurationError, UnreachableTargetError
 from footfall.motion.gait import (
@@ -40,6 +42,10 @@ from footfall.motion.kinematics import LegKinematics
 from footfall.motion.planar import PlanarPose
 from footfall.motion.swing import FlowSwing, PolynomialArcSwing, SwingTrajectory
 from footfall.robot.spec import HexapodSpec
+
+if TYPE_CHECKING:
+    from footfall.backend import RobotState
+    from footfall.planning.terrain_planner import TerrainPlanner
 
 # Time step of the finite difference that gives the swing foot's velocity [s].
 _VELOCITY_PROBE_DT = 1e-3
@@ -66,14 +72,65 @@ class JointTargets:
     velocities: npt.NDArray[np.float64]
 
 
+@dataclass(frozen=True)
+class FeedbackConfig:
+    """Body attitude and height feedback (the draft's tilt stabilisation, thesis §8.1's fix).
+
+    Attributes:
+        tilt_gain: Integral gain on IMU roll and pitch [1/s].
+        tilt_limit: Largest attitude correction [rad].
+        height_gain: Integral gain on the measured height above the stance feet [1/s].
+        height_limit: Largest height correction [m].
+    """
+
+    tilt_gain: float = 3.0
+    tilt_limit: float = math.radians(6.0)
+    height_gain: float = 3.0
+    height_limit: float = 0.02
+
+
+@dataclass(frozen=True)
+class TouchdownRecord:
+    """Where a foot was meant to land and where the planner put it.
+
+    Attributes:
+        time: Touchdown time [s].
+        leg: Leg index.
+        nominal: Nominal foothold (foot centre) in the world, shape (3,) [m].
+        chosen: Planned foothold (foot centre) in the world, shape (3,) [m].
+    """
+
+    time: float
+    leg: int
+    nominal: npt.NDArray[np.float64]
+    chosen: npt.NDArray[np.float64]
+
+
+@dataclass
+class _StepPlan:
+    nominal: npt.NDArray[np.float64] = field(default_factory=lambda: np.zeros((6, 3)))
+    targets: npt.NDArray[np.float64] = field(default_factory=lambda: np.zeros((6, 3)))
+    version: int = -1
+    pending_freeze: str = ""
+
+
 class WalkController:
     """Turns walk commands into joint targets for a hexapod.
+
+    Without a planner the controller walks blind on the plane z = 0 (the thesis'
+    baseline). With a :class:`~footfall.planning.terrain_planner.TerrainPlanner` it moves
+    every foothold to the nearest acceptable cell of the map, keeps the body its commanded
+    height above the floor estimate, lifts swing paths over the mapped terrain, and freezes
+    with all feet down when a swinging leg has no acceptable foothold; it resumes when the
+    command or the map changes.
 
     Args:
         spec: The robot.
         config: Gait parameters.
         initial_pose: Body pose in the world frame at start.
         initial_height: Body height at start [m]; the spec's nominal height by default.
+        planner: Terrain planner, or None for blind walking.
+        feedback: Attitude and height feedback from the measured state, or None for none.
     """
 
     def __init__(
@@ -82,6 +139,8 @@ class WalkController:
         config: GaitConfig | None = None,
         initial_pose: PlanarPose | None = None,
         initial_height: float | None = None,
+        planner: TerrainPlanner | None = None,
+        feedback: FeedbackConfig | None = None,
     ) -> None:
         self.spec = spec
         self.config = (config or GaitConfig()).for_robot(spec.stride_length, spec.max_step_height)
@@ -106,6 +165,18 @@ class WalkController:
         self._last_walk_direction = np.array([1.0, 0.0])
         self._rolling_in_world = np.zeros((6, 3))  # rolling displacement of stance feet [m]
         self._tibia_pitch_at_touchdown = np.full(6, np.nan)  # psi when the foot came down [rad]
+        self.planner = planner
+        self.feedback = feedback
+        self.floor = 0.0  # ground height the body keeps its commanded height above [m]
+        self.tilt_correction = np.zeros(2)  # commanded roll, pitch offset [rad]
+        self.height_correction = 0.0  # [m]
+        self.footholds_adjusted = 0
+        self.touchdowns: list[TouchdownRecord] = []
+        self._plan = _StepPlan()
+        self._frozen_command: WalkCommand | None = None
+        self._body_height_command = self.height
+        self._start_of_walk = True
+        self._frozen_version = -1
         self._last_targets = self._solve(np.zeros((6, 3)), 0.0, 0.0)
 
     # Public ------------------------------------------------------------------------------
@@ -114,17 +185,26 @@ class WalkController:
         """Reference body velocity after rate limits and the stroke governor [m/s]."""
         return (self._velocity[0] * self._velocity_scale, self._velocity[1] * self._velocity_scale)
 
-    def update(self, t: float, command: WalkCommand) -> JointTargets:
+    def update(
+        self, t: float, command: WalkCommand, state: RobotState | None = None
+    ) -> JointTargets:
         """Advance the controller to time ``t`` and return the joint targets.
 
         Args:
             t: Controller time [s]; must not decrease.
             command: The current command.
+            state: The latest measured state, for attitude and height feedback.
         """
         dt = 0.0 if self._time is None else max(t - self._time, 0.0)
         self._time = t
         if self.state is GaitState.FROZEN:
-            return self._last_targets
+            if not self._may_resume(command):
+                return self._last_targets
+            self.state = GaitState.REST
+            self.frozen_reason = ""
+            self._velocity, self._yaw_rate = (0.0, 0.0), 0.0
+        if state is not None and self.feedback is not None:
+            self._feedback(state, dt)
         self._shape_command(command, dt)
         self._velocity_scale = self._stroke_governor(t)
         self._move_body(command, dt)
@@ -133,11 +213,78 @@ class WalkController:
         try:
             targets = self._solve(swing_velocity, *self._twist_scaled())
         except UnreachableTargetError as exc:
-            self.state = GaitState.FROZEN
-            self.frozen_reason = str(exc)
+            self._freeze(str(exc), command)
             return self._last_targets
         self._last_targets = targets
+        if self.state is GaitState.FROZEN:
+            self._frozen_command = command
         return targets
+
+    def correct_pose(self, estimate: PlanarPose) -> None:
+        """Re-register the controller's world on a body pose estimate in the map frame.
+
+        The reference pose, the supporting feet and the swing paths move together by the
+        planar transform that takes the reference pose onto the estimate, so the legs hold
+        still while footholds planned on the map land where the map says.
+        """
+        c, s = math.cos(estimate.yaw - self.pose.yaw), math.sin(estimate.yaw - self.pose.yaw)
+        rotation = np.array([[c, -s], [s, c]])
+        translation = np.array([estimate.x, estimate.y]) - rotation @ np.array(
+            [self.pose.x, self.pose.y]
+        )
+
+        def move(points: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+            out = points.copy()
+            out[..., :2] = points[..., :2] @ rotation.T + translation
+            return out
+
+        self.feet_in_world = move(self.feet_in_world)
+        self._rolling_in_world[:, :2] = self._rolling_in_world[:, :2] @ rotation.T
+        self._plan.nominal = move(self._plan.nominal)
+        self._plan.targets = move(self._plan.targets)
+        for swing in self.swings.values():
+            swing.transform(rotation, translation)
+        self.pose = estimate
+
+    def _freeze(self, reason: str, command: WalkCommand | None = None) -> None:
+        self.state = GaitState.FROZEN
+        self.frozen_reason = reason
+        self._frozen_command = command
+        self._frozen_version = self.planner.version if self.planner is not None else -1
+
+    def _may_resume(self, command: WalkCommand) -> bool:
+        """A frozen robot tries again when the command or the map has changed."""
+        if self._frozen_command is not None and command != self._frozen_command:
+            return True
+        return self.planner is not None and self.planner.version != self._frozen_version
+
+    def _feedback(self, state: RobotState, dt: float) -> None:
+        """Integrate IMU roll and pitch, and the measured body height, into corrections.
+
+        The height is that of the body above its stance feet, from the joint encoders and
+        the IMU attitude.
+        """
+        fb = self.feedback
+        assert fb is not None
+        roll, pitch = state.roll_pitch
+        limit = fb.tilt_limit
+        self.tilt_correction = np.clip(
+            self.tilt_correction - fb.tilt_gain * np.array([roll, pitch]) * dt, -limit, limit
+        )
+        stance = ~self.swinging
+        if stance.sum() < 3:
+            return
+        feet_in_body = self.kinematics.forward_in_body(state.joint_positions)[stance]
+        level = state.orientation_body_in_world.apply(feet_in_body)
+        measured = -float(level[:, 2].mean())
+        reference = self.height - float(self.feet_in_world[stance, 2].mean())
+        self.height_correction = float(
+            np.clip(
+                self.height_correction + fb.height_gain * (reference - measured) * dt,
+                -fb.height_limit,
+                fb.height_limit,
+            )
+        )
 
     @property
     def feet_commanded_in_world(self) -> npt.NDArray[np.float64]:
@@ -158,6 +305,7 @@ class WalkController:
 
     # Command shaping ---------------------------------------------------------------------
     def _shape_command(self, command: WalkCommand, dt: float) -> None:
+        self._body_height_command = command.body_height
         vx, vy = command.velocity_in_body
         speed = math.hypot(vx, vy)
         if speed > self.config.max_speed:
@@ -179,15 +327,15 @@ class WalkController:
     def _stroke_governor(self, t: float) -> float:
         """Largest fraction of the commanded twist the supporting feet allow.
 
-        Every supporting foot must stay within its stroke until it lifts off; this protects
-        the legs at start-up and on command changes.
+        Every supporting foot must stay within reach until it lifts off: blind, within its
+        nominal stroke (plus a margin), which protects the legs at start-up and on command
+        changes; with a planner, whose footholds may sit off their nominal places, within
+        the leg's workspace (checked by inverse kinematics at the predicted lift-off).
         """
         if self.state is not GaitState.STEPPING:
             return 1.0
         n = len(self.config.groups)
-        reach = 0.5 * self.config.stride * self.config.duty_factor + self.config.stroke_margin
-        feet = self.feet_in_body()[:, :2]
-        offset = feet - self._rest_in_body[:, :2]
+        feet = self.feet_in_body()
         vx, vy = self._velocity
         # Body-frame velocity of a world-fixed point: -(v + omega x p).
         drift = np.stack(
@@ -198,18 +346,45 @@ class WalkController:
         for leg in np.flatnonzero(~self.swinging):
             steps_until = self._steps_until_swing(int(leg), n)
             u = drift[leg] * (remaining + (steps_until - 1) * self.step_duration)
-            a, b, c = (
-                float(u @ u),
-                float(offset[leg] @ u),
-                float(offset[leg] @ offset[leg]) - reach**2,
-            )
-            if a < 1e-12:
+            if float(u @ u) < 1e-12:
                 continue
-            if c > 0:
-                scale = min(scale, 1.0 if b < 0 else 0.0)
+            if self.planner is None:
+                scale = min(
+                    scale, self._stroke_scale(feet[leg, :2] - self._rest_in_body[leg, :2], u)
+                )
             else:
-                scale = min(scale, (-b + math.sqrt(b * b - a * c)) / a)
+                scale = min(scale, self._reach_scale(int(leg), feet[leg], u))
         return max(scale, 0.0)
+
+    def _stroke_scale(self, offset: npt.NDArray[np.float64], u: npt.NDArray[np.float64]) -> float:
+        """Largest k in [0, 1] with |offset + k u| within the nominal stroke (plus margin)."""
+        reach = 0.5 * self.config.stride * self.config.duty_factor + self.config.stroke_margin
+        a, b, c = float(u @ u), float(offset @ u), float(offset @ offset) - reach**2
+        if c > 0:
+            return 1.0 if b < 0 else 0.0
+        return min(1.0, (-b + math.sqrt(b * b - a * c)) / a)
+
+    def _reach_scale(
+        self, leg: int, foot: npt.NDArray[np.float64], u: npt.NDArray[np.float64]
+    ) -> float:
+        """Largest k in [0, 1] keeping the foot reachable after drifting by k u (bisection)."""
+        margin = self.planner.config.reach_margin if self.planner is not None else 0.0
+
+        def ok(k: float) -> bool:
+            p = foot.copy()
+            p[:2] += k * u
+            return self.kinematics.reachable(leg, p, margin)
+
+        if ok(1.0):
+            return 1.0
+        if not ok(0.0):
+            # Already at the edge: allow motion that brings the foot back in.
+            return 1.0 if ok(0.05) else 0.0
+        low, high = 0.0, 1.0
+        for _ in range(6):
+            mid = 0.5 * (low + high)
+            low, high = (mid, high) if ok(mid) else (low, mid)
+        return low
 
     def _steps_until_swing(self, leg: int, n: int) -> int:
         groups = self.config.groups
@@ -223,7 +398,7 @@ class WalkController:
         self.pose = self.pose.moved(
             (self._velocity[0] * scale, self._velocity[1] * scale), self._yaw_rate * scale, dt
         )
-        dh = command.body_height - self.height
+        dh = self.floor + command.body_height - self.height
         limit = self.config.height_rate_limit * dt
         self.height += float(np.clip(dh, -limit, limit))
 
@@ -245,12 +420,24 @@ class WalkController:
             for leg, swing in self.swings.items():
                 self.feet_in_world[leg] = swing.target
                 self._tibia_pitch_at_touchdown[leg] = np.nan
+                record = TouchdownRecord(t, leg, self._plan.nominal[leg].copy(), swing.target)
+                self.touchdowns.append(record)
+                self.footholds_adjusted += bool(
+                    np.hypot(*(record.chosen - record.nominal)[:2]) > 1e-3
+                )
             self.swings = {}
             self.swinging[:] = False
             self.steps_taken += 1
             self.state = GaitState.REST
-        if self.state is GaitState.REST and (self._moving() or self._feet_off_rest().any()):
-            self._start_step(t)
+            if self._plan.pending_freeze:
+                self._freeze(self._plan.pending_freeze)
+                self._plan.pending_freeze = ""
+                return
+        if self.state is GaitState.REST:
+            if self._moving() or self._feet_off_rest().any():
+                self._start_step(t)
+            else:
+                self._start_of_walk = True  # at rest on the rest stance: the next walk starts anew
 
     def _foot_speed(self) -> float:
         vx, vy = self._velocity
@@ -271,7 +458,10 @@ class WalkController:
                     swing[list(self.config.groups[index])] = True
                     return swing
             return swing
-        if self.config.kind is GaitKind.TRIPOD and math.hypot(*self._velocity) > 1e-6:
+        walking = math.hypot(*self._velocity) > 1e-6
+        if self._start_of_walk and self.config.kind is GaitKind.TRIPOD and walking:
+            # Eqs. 5.15-5.16 pick the first tripod from the walk direction; after that the
+            # tripods alternate, so a set held back (a refused step) is never starved.
             swing = tripod_swing_set(
                 self._last_walk_direction,
                 self._rest_in_body,
@@ -279,12 +469,14 @@ class WalkController:
                 self.spec.mount_positions_in_body,
             )
             self._group_index = 0 if swing[0] else 1
+            self._start_of_walk = False
             return swing
-        if self.steps_taken == 0 and math.hypot(*self._velocity) > 1e-6:
+        if self._start_of_walk and walking:
             # First step of a ripple or wave walk: start with the group of the leg facing the
             # walk direction (the sextant rule of §5.3.3), then follow the cycle.
             xi = active_sextant(self._last_walk_direction, self._rest_in_body)
             self._group_index = next(i for i, g in enumerate(self.config.groups) if xi in g)
+            self._start_of_walk = False
         else:
             self._group_index = (self._group_index + 1) % n
         swing[list(self.config.groups[self._group_index])] = True
@@ -301,24 +493,97 @@ class WalkController:
             else self.config.rest_step_duration
         )
         self.step_start = t
+        nominal = self._nominal_targets(n)
+        targets = self._plan_footholds(nominal, swing)
+        if isinstance(targets, str):
+            self._freeze(targets)  # no step started: every foot is still down
+            return
         self.swinging = swing
         self.state = GaitState.STEPPING
-        targets = self._swing_targets(n)
         self.swings = {}
+        terrain = self.planner.terrain_under if self.planner is not None else None
+        clearance = (
+            self.planner.config.swing_clearance + self.spec.foot_radius
+            if self.planner is not None
+            else 0.0
+        )
         for leg in np.flatnonzero(swing):
             start = self.feet_commanded_in_world[leg].copy()
             self.feet_in_world[leg] = start
             self._rolling_in_world[leg] = 0.0
             if self.config.swing == "flow":
                 self.swings[int(leg)] = FlowSwing(
-                    start, targets[leg], self.step_duration, self.config.flow
+                    start, targets[leg], self.step_duration, self.config.flow, terrain, clearance
                 )
             else:
                 self.swings[int(leg)] = PolynomialArcSwing(
                     start, targets[leg], self.step_duration, self.config.polynomial_apex
                 )
+        self._update_floor(targets)
 
-    def _swing_targets(self, n: int) -> npt.NDArray[np.float64]:
+    def _support_after(self, swing: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
+        """Legs that support during the step after this one (all but the next group)."""
+        if self.config.kind is GaitKind.TRIPOD:
+            return swing.copy()
+        n = len(self.config.groups)
+        support = np.ones(6, dtype=bool)
+        support[list(self.config.groups[(self._group_index + 1) % n])] = False
+        return support
+
+    def _plan_footholds(
+        self, nominal: npt.NDArray[np.float64], swing: npt.NDArray[np.bool_]
+    ) -> npt.NDArray[np.float64] | str:
+        """Targets for the swinging legs: nominal when blind, else the planner's choice."""
+        self._plan.nominal = nominal.copy()
+        if self.planner is None:
+            self._plan.targets = nominal.copy()
+            return nominal
+        n = len(self.config.groups)
+        remaining = max(self.step_start + self.step_duration - (self._time or 0.0), 0.0)
+        vx, vy = self.body_velocity_in_body
+        yaw_rate = self._yaw_rate * self._velocity_scale
+
+        def pose_after(seconds: float) -> PlanarPose:
+            return self.pose.moved((vx, vy), yaw_rate, seconds)
+
+        reach_poses = (pose_after(remaining), pose_after(remaining + (n - 1) * self.step_duration))
+        stable_poses = (pose_after(remaining), pose_after(remaining + self.step_duration))
+        plan = self.planner.plan(
+            nominal,
+            swing,
+            self._support_after(swing),
+            self.feet_commanded_in_world,
+            reach_poses,
+            stable_poses,
+            self.floor + self._body_height_command,
+        )
+        self._plan.version = self.planner.version
+        if isinstance(plan, str):
+            return plan
+        self._plan.targets = plan.targets.copy()
+        return plan.targets
+
+    def _update_floor(self, targets: npt.NDArray[np.float64]) -> None:
+        """Thesis §6.4: the floor under the body follows the footholds (blind: z = 0)."""
+        if self.planner is None:
+            return
+        feet = np.where(self.swinging[:, None], targets, self.feet_in_world)
+        wanted = self.planner.floor_height(
+            feet[:, 2] - self.spec.foot_radius, self.pose, self._body_height_command
+        )
+        # Keep every foot (stance, and swing targets) within reach: of the floors near the
+        # wanted one, take the closest at which all legs reach their feet.
+        in_body = self.pose.points_to_body(feet)
+        for delta in sorted(np.arange(-0.08, 0.0801, 0.005), key=abs):
+            body_z = wanted + delta + self._body_height_command
+            p = in_body.copy()
+            p[:, 2] -= body_z
+            if all(self.kinematics.reachable(leg, p[leg], 0.005) for leg in range(6)):
+                self.floor = float(wanted + delta)
+                return
+        self.floor = float(wanted)
+
+    def _nominal_targets(self, n: int) -> npt.NDArray[np.float64]:
         """Touchdown targets in the world, shape (6, 3) [m].
 
         Each leg's rest position at the body pose predicted for the middle of its coming
@@ -337,7 +602,7 @@ class WalkController:
         velocity = np.zeros((6, 3))
         if not self.swings:
             return velocity
-        targets = self._swing_targets(len(self.config.groups))
+        targets = self._current_targets()
         local_t = t - self.step_start
         for leg, swing in self.swings.items():
             if np.linalg.norm(targets[leg] - swing.target) > self.config.retarget_tolerance:
@@ -347,11 +612,61 @@ class WalkController:
             velocity[leg] = (ahead - self.feet_in_world[leg]) / _VELOCITY_PROBE_DT
         return velocity
 
+    def _current_targets(self) -> npt.NDArray[np.float64]:
+        """Swing targets now: re-planned when the nominal ones moved or the map changed.
+
+        When a re-plan finds no acceptable foothold mid-swing, the foot goes back to where it
+        lifted off (a known, safe cell) and the robot freezes at the end of the step.
+        """
+        nominal = self._nominal_targets(len(self.config.groups))
+        if self.planner is None:
+            self._plan.nominal = nominal
+            self._plan.targets = nominal
+            return nominal
+        moved = np.linalg.norm(
+            nominal[self.swinging, :2] - self._plan.nominal[self.swinging, :2], axis=1
+        )
+        stale = self.planner.version != self._plan.version
+        if not self._plan.pending_freeze and (stale or (moved.size and moved.max() > 0.02)):
+            replanned = self._plan_footholds(nominal, self.swinging)
+            if isinstance(replanned, str):
+                self._plan.pending_freeze = replanned
+                for leg, swing in self.swings.items():
+                    self._plan.targets[leg] = swing.start
+            else:
+                self._update_floor(replanned)
+        return self._plan.targets
+
     # Kinematics ---------------------------------------------------------------------------
+    def _within_reach(self, feet_in_body: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """Bring a swinging foot that left its leg's workspace back in by lowering it.
+
+        A swing lifted over the terrain can ask for more than a leg reaches near the body;
+        the foot then flies as high as the leg allows. Supporting feet are never moved: if
+        one is out of reach, inverse kinematics raises and the robot freezes.
+        """
+        out = feet_in_body
+        for leg in np.flatnonzero(self.swinging):
+            if self.kinematics.reachable(leg, out[leg]):
+                continue
+            for drop in np.arange(0.005, 0.1001, 0.005):
+                lowered = out[leg] - [0.0, 0.0, drop]
+                if self.kinematics.reachable(leg, lowered):
+                    out = out.copy()
+                    out[leg] = lowered
+                    break
+        return out
+
     def _solve(
         self, swing_velocity_in_world: npt.NDArray[np.float64], scale: float, yaw_rate: float
     ) -> JointTargets:
         anchors = self.feet_in_body()
+        # Feedback: raise the body by the height correction, and command it tilted by the
+        # attitude correction (feet in a body frame rotated by R(roll, pitch)).
+        anchors[:, 2] -= self.height_correction
+        if np.any(self.tilt_correction):
+            anchors = anchors @ Rotation.from_euler("xy", self.tilt_correction).as_matrix()
+        anchors = self._within_reach(anchors)
         feet = anchors
         angles = self.kinematics.inverse_in_body(feet)
         stance = ~self.swinging

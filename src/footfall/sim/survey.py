@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import itertools
-import statistics
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -13,16 +12,16 @@ import numpy.typing as npt
 
 from footfall.control_loop import run_control_loop
 from footfall.errors import ConfigError
-from footfall.mapping.height_map import HeightMap, HeightMapConfig, MapSnapshot
+from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
 from footfall.motion.gait import GaitConfig, WalkCommand
 from footfall.motion.planar import PlanarPose
 from footfall.motion.walker import WalkController
 from footfall.robot.spec import HexapodSpec
 from footfall.scoring.walkability import ScoreConfig, ScoreMap, score_map
 from footfall.sensing.pose import SlamNoise, SlamNoiseConfig
-from footfall.sim.camera import SimDepthCamera
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import CameraMount
+from footfall.sim.perception import SimPerception
 from footfall.sim.terrain import Terrain, make_terrain
 
 NOISE_MODELS = ("none", "slam")
@@ -174,42 +173,21 @@ def simulate_mapping(
     terrain = make_terrain(settings.terrain, seed=settings.seed)
     backend = MujocoHexapod(spec, terrain, settings.camera)
     backend.advance(0.3)
-    camera = SimDepthCamera(backend.model, settings.camera)
     noise = SlamNoise(settings.slam, rng) if settings.noise == "slam" else None
-    start = terrain.start
-    height_map = HeightMap(settings.map, centre=start)
-    controller = WalkController(spec, GaitConfig(kind="tripod"), initial_pose=PlanarPose(*start))
+    perception = SimPerception(backend, settings.camera, settings.map, settings.score, noise)
+    controller = WalkController(
+        spec, GaitConfig(kind="tripod"), initial_pose=PlanarPose(*terrain.start)
+    )
     command = WalkCommand(speed=settings.speed, body_height=spec.body_height)
-    period = 1.0 / settings.camera.rate_hz
-    next_frame = 0.0
-    update_ms: list[float] = []
-    render_ms: list[float] = []
-    dropped = 0
-    outside = 0
 
     def sense(t: float) -> None:
-        nonlocal next_frame, dropped, outside
         if on_tick is not None:
             on_tick(t)
-        if t + 1e-9 < next_frame:
-            return
-        next_frame += period
-        t0 = time.perf_counter()
-        depth, true_pose = camera.capture(backend.data)
-        t1 = time.perf_counter()
-        pose = noise.estimate(true_pose, t) if noise is not None else true_pose
-        body = backend.data.xpos[backend.model.body("torso").id]
-        height_map.recentre((float(body[0]), float(body[1])))
-        stats = height_map.integrate_depth(depth, camera.intrinsics, pose)
-        t2 = time.perf_counter()
-        render_ms.append(1e3 * (t1 - t0))
-        update_ms.append(1e3 * (t2 - t1))
-        dropped += stats.depth.dropped
-        outside += stats.outside
+        perception.maybe_update(t)
 
     log = run_control_loop(backend, controller, command, settings.seconds, on_tick=sense)
-    camera.close()
-    snapshot = height_map.snapshot()
+    perception.close()
+    snapshot = perception.height_map.snapshot()
     t0 = time.perf_counter()
     scores = score_map(snapshot, settings.score)
     score_ms = 1e3 * (time.perf_counter() - t0)
@@ -217,12 +195,11 @@ def simulate_mapping(
     metrics: dict[str, object] = {
         **map_accuracy(terrain, snapshot),
         "coverage": path_coverage(snapshot, path),
-        "frames": len(update_ms),
-        "map_update_ms_median": statistics.median(update_ms) if update_ms else float("nan"),
-        "render_ms_median": statistics.median(render_ms) if render_ms else float("nan"),
+        "frames": perception.frames,
+        **perception.timing(),
         "score_ms": score_ms,
-        "pixels_dropped": dropped,
-        "points_outside_map": outside,
+        "pixels_dropped": perception.pixels_dropped,
+        "points_outside_map": perception.points_outside,
         "valid_fraction_of_known": float(scores.valid[snapshot.known].mean())
         if snapshot.known.any()
         else 0.0,

@@ -171,7 +171,7 @@ class Cobblestones(Terrain):
         width: Field width along y [m].
     """
 
-    stone: float = 0.12
+    stone: float = 0.16
     groove: float = 0.03
     height_mean: float = 0.03
     jitter: float = 0.01
@@ -276,9 +276,10 @@ class Course(Terrain):
         h = np.maximum(
             h, np.where((np.abs(xa - 2.3) <= 0.11) & (np.abs(ya + 0.5) <= 0.15), 0.10, 0.0)
         )
-        # Right: a sloped hole, bottom r 0.08 at -6 cm, walls rising to the floor at r 0.19.
+        # Right: a sloped hole, bottom r 0.11 at -7 cm, walls (41 deg) rising to the floor
+        # at r 0.19.
         r = np.hypot(xa - 0.9, ya + 0.5)
-        hole = -np.clip(0.06 * (0.19 - r) / 0.11, 0.0, 0.06)
+        hole = -np.clip(0.07 * (0.19 - r) / 0.08, 0.0, 0.07)
         return np.where(hole < 0, hole, h)
 
     def mjcf(self) -> TerrainXml:

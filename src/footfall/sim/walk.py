@@ -1,20 +1,35 @@
-"""A simulated walk: robot, terrain, controller and control loop put together."""
+"""A simulated walk: robot, terrain, perception, controller and control loop put together."""
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numpy as np
+import numpy.typing as npt
+
 from footfall.control_loop import WalkLog, run_control_loop
 from footfall.errors import ConfigError
-from footfall.metrics import walk_metrics
+from footfall.mapping.height_map import HeightMapConfig
+from footfall.metrics import FALL_HEIGHT_FRACTION, FALL_TILT_DEG, walk_metrics
 from footfall.motion.gait import GaitConfig, WalkCommand
-from footfall.motion.walker import WalkController
+from footfall.motion.planar import PlanarPose
+from footfall.motion.walker import FeedbackConfig, GaitState, TouchdownRecord, WalkController
+from footfall.planning.terrain_planner import TerrainPlanner, TerrainPlannerConfig
 from footfall.robot.spec import HexapodSpec
+from footfall.scoring.walkability import ScoreConfig, ScoreMap, score_heights
 from footfall.sim.hexapod import MujocoHexapod
+from footfall.sim.model import CameraMount
+from footfall.sim.perception import SimPerception
+from footfall.sim.terrain import TERRAIN_NAMES, Terrain, make_terrain
 
-TERRAINS = ("flat",)
+TERRAINS = TERRAIN_NAMES
+# The goal counts as reached when the body is this close to it, or past it [m].
+GOAL_TOLERANCE = 0.1
+# A robot frozen this long with nothing changing ends the run [s].
+FROZEN_TIMEOUT = 3.0
 
 
 @dataclass(frozen=True)
@@ -23,22 +38,37 @@ class WalkSettings:
 
     Attributes:
         terrain: Terrain name (see ``TERRAINS``).
-        seconds: Walking time [s], after the robot has settled on its feet.
-        command: The walk command, held for the whole walk.
+        seconds: Longest walking time [s]; the walk ends early at the goal, after a fall,
+            or when frozen for a while.
+        command: Speed and body height; the heading is steered towards the terrain's goal.
         gait: Gait parameters.
+        blind: The thesis' baseline: nominal footholds on the plane z = 0, no camera, no
+            feedback. Otherwise the full loop: camera -> map -> scores -> footholds.
+        camera: Depth camera (planned walking only).
+        map: Height map settings.
+        score: Score settings.
+        planner: Foothold planner settings.
+        feedback: Attitude and height feedback (planned walking only).
         control_rate_hz: Controller rate [Hz].
         settle_seconds: Time the robot stands still before walking [s].
-        seed: Seed for everything random in the run (random terrains, sensor noise); a
-            flat walk draws nothing random, and every run is deterministic.
+        seed: Seed of random terrains.
+        stop_at_goal: End the walk once the goal is reached.
     """
 
     terrain: str = "flat"
     seconds: float = 20.0
     command: WalkCommand = field(default_factory=lambda: WalkCommand(speed=0.1))
     gait: GaitConfig = field(default_factory=GaitConfig)
+    blind: bool = True
+    camera: CameraMount = field(default_factory=lambda: CameraMount(width=320, height=240))
+    map: HeightMapConfig = field(default_factory=HeightMapConfig)
+    score: ScoreConfig = field(default_factory=ScoreConfig)
+    planner: TerrainPlannerConfig = field(default_factory=TerrainPlannerConfig)
+    feedback: FeedbackConfig = field(default_factory=FeedbackConfig)
     control_rate_hz: float = 100.0
     settle_seconds: float = 0.5
     seed: int = 0
+    stop_at_goal: bool = False
 
     def __post_init__(self) -> None:
         if self.terrain not in TERRAINS:
@@ -59,17 +89,133 @@ class WalkResult:
         log: Per-tick record.
         metrics: Summary metrics (the ``metrics.json`` content).
         warnings: MuJoCo warnings by name; empty for a healthy simulation.
+        terrain: The terrain walked.
+        touchdowns: Every touchdown with its nominal and chosen foothold.
+        scores: The last score map (planned walking), else None.
     """
 
     log: WalkLog
     metrics: dict[str, object]
     warnings: dict[str, int]
+    terrain: Terrain
+    touchdowns: list[TouchdownRecord]
+    scores: ScoreMap | None
+
+
+class TrueScores:
+    """The ground-truth terrain scored on a grid: which cells a foot may really use."""
+
+    def __init__(
+        self, terrain: Terrain, resolution: float, score: ScoreConfig, extent: tuple[float, ...]
+    ) -> None:
+        x0, x1, y0, y1 = extent
+        self.origin = (x0, y0)
+        self.resolution = resolution
+        xs = x0 + (np.arange(round((x1 - x0) / resolution)) + 0.5) * resolution
+        ys = y0 + (np.arange(round((y1 - y0) / resolution)) + 0.5) * resolution
+        _, _, self.score, self.valid = score_heights(
+            terrain.height(xs[:, None], ys[None, :]), resolution, score
+        )
+
+    def valid_at(self, xy: npt.ArrayLike) -> bool:
+        """Whether the true terrain is walkable at a world point (off the grid: flat, valid)."""
+        i, j = (int(v) for v in np.floor((np.asarray(xy) - self.origin) / self.resolution))
+        if 0 <= i < self.valid.shape[0] and 0 <= j < self.valid.shape[1]:
+            return bool(self.valid[i, j])
+        return True
+
+
+def _touchdown_feet(log: WalkLog, min_step: float = 0.02) -> list[tuple[int, int]]:
+    """(tick, leg) of every touchdown in the log that moved the foot at least ``min_step``.
+
+    A foot put back where it lifted off is not a new foothold.
+    """
+    swinging = log.array("swinging").astype(np.int8)
+    feet = log.array("feet_commanded_in_world")
+    out = []
+    for leg in range(swinging.shape[1]):
+        lifts = np.flatnonzero(np.diff(swinging[:, leg]) == 1) + 1
+        for k in np.flatnonzero(np.diff(swinging[:, leg]) == -1) + 1:
+            earlier = lifts[lifts < k]
+            if (
+                earlier.size
+                and np.hypot(*(feet[k, leg, :2] - feet[earlier[-1] - 1, leg, :2])) >= min_step
+            ):
+                out.append((int(k), leg))
+    return sorted(out)
+
+
+def foothold_metrics(
+    log: WalkLog, terrain: Terrain, truth: TrueScores, foot_radius: float
+) -> dict[str, object]:
+    """Invalid touchdowns (on cells the true terrain scores invalid) and swing clearance."""
+    feet = log.array("feet_in_world")
+    invalid = 0
+    settle = 3  # ticks after touchdown, once the foot rests
+    for tick, leg in _touchdown_feet(log):
+        k = min(tick + settle, len(feet) - 1)
+        invalid += not truth.valid_at(feet[k, leg, :2])
+    swinging = log.array("swinging")
+    clearance = np.inf
+    r = foot_radius
+    for leg in range(6):
+        s = swinging[:, leg].astype(np.int8)
+        starts = np.flatnonzero(np.diff(s) == 1) + 1
+        ends = np.flatnonzero(np.diff(s) == -1) + 1
+        for a in starts:
+            later = ends[ends > a]
+            if not later.size:
+                continue
+            path = feet[a : later[0], leg]
+            away = (np.linalg.norm(path[:, :2] - path[0, :2], axis=1) > 0.03) & (
+                np.linalg.norm(
+                    path[:, :2] - feet[min(later[0] + settle, len(feet) - 1), leg, :2], axis=1
+                )
+                > 0.03
+            )
+            if not away.any():
+                continue
+            p = path[away]
+            under = np.max(
+                [
+                    terrain.height(p[:, 0] + dx, p[:, 1] + dy)
+                    for dx, dy in ((0, 0), (r, 0), (-r, 0), (0, r), (0, -r))
+                ],
+                axis=0,
+            )
+            clearance = min(clearance, float(np.min(p[:, 2] - r - under)))
+    return {
+        "touchdowns": len(_touchdown_feet(log)),
+        "invalid_footholds": invalid,
+        "min_clearance_m": clearance if np.isfinite(clearance) else float("nan"),
+    }
+
+
+def _seed_start_area(
+    perception: SimPerception, backend: MujocoHexapod, radius: float = 0.6
+) -> None:
+    """Mark the ground around the robot's start as known, at its feet's height.
+
+    The camera looks ahead and never sees under or beside the robot, where its first steps
+    land; the robot stands there, so the plane through its feet is taken as the ground
+    within ``radius`` (a proprioceptive prior). Cells the camera sees replace it.
+    """
+    state = backend.read()
+    assert state.feet_in_world is not None and state.position_body_in_world is not None
+    ground = float(np.mean(state.feet_in_world[:, 2])) - backend.spec.foot_radius
+    res = perception.height_map.config.resolution
+    offsets = np.arange(-radius, radius + res, res)
+    gx, gy = np.meshgrid(offsets, offsets)
+    inside = np.hypot(gx, gy) <= radius
+    xy = state.position_body_in_world[:2] + np.stack([gx[inside], gy[inside]], axis=1)
+    points = np.column_stack([xy, np.full(len(xy), ground)])
+    perception.height_map.integrate_points(points, state.position_body_in_world)
 
 
 def simulate_walk(
     spec: HexapodSpec, settings: WalkSettings, on_tick: Callable[[float], None] | None = None
 ) -> WalkResult:
-    """Walk the robot in MuJoCo and measure how it went.
+    """Walk the robot across a terrain in MuJoCo, towards the terrain's goal.
 
     Args:
         spec: The robot.
@@ -79,30 +225,118 @@ def simulate_walk(
     Returns:
         The record, metrics and simulator warnings.
     """
-    backend = MujocoHexapod(spec, body_height=settings.command.body_height)
+    terrain = make_terrain(settings.terrain, seed=settings.seed)
+    camera = None if settings.blind else settings.camera
+    backend = MujocoHexapod(spec, terrain, camera, body_height=settings.command.body_height)
     backend.advance(settings.settle_seconds)
-    controller = WalkController(spec, settings.gait, initial_height=settings.command.body_height)
+    planner = None if settings.blind else TerrainPlanner(spec, settings.planner)
+    perception = None
+    if not settings.blind:
+        perception = SimPerception(
+            backend, settings.camera, settings.map, settings.score, None, planner
+        )
+        _seed_start_area(perception, backend)
+        perception.maybe_update(0.0)
+    controller = WalkController(
+        spec,
+        settings.gait,
+        initial_pose=PlanarPose(*terrain.start),
+        initial_height=settings.command.body_height,
+        planner=planner,
+        feedback=None if settings.blind else settings.feedback,
+    )
+    goal = np.asarray(terrain.goal, dtype=np.float64)
+    start = np.asarray(terrain.start, dtype=np.float64)
+    route = (goal - start) / np.linalg.norm(goal - start)
+    base = settings.command
+
+    def progress(xy: npt.NDArray[np.float64]) -> float:
+        return float((xy - start) @ route)
+
+    def command(t: float) -> WalkCommand:
+        pose = controller.pose
+        here = np.array([pose.x, pose.y])
+        if progress(here) >= progress(goal) - GOAL_TOLERANCE:
+            return WalkCommand(speed=0.0, body_height=base.body_height)
+        # Steer along the start -> goal line: aim a little ahead on it.
+        aim = start + route * (progress(here) + 0.5)
+        heading = math.atan2(aim[1] - here[1], aim[0] - here[0])
+        error = math.atan2(math.sin(heading - pose.yaw), math.cos(heading - pose.yaw))
+        return WalkCommand(
+            speed=base.speed,
+            body_height=base.body_height,
+            yaw_rate=float(np.clip(error, -0.3, 0.3)),
+        )
+
+    frozen_since: list[float] = []
+
+    def tick(t: float) -> None:
+        if perception is not None and perception.maybe_update(t):
+            controller.correct_pose(perception.planar_body_estimate())
+        if on_tick is not None:
+            on_tick(t)
+
+    def stop(log: WalkLog) -> bool:
+        body = log.body_position_in_world[-1]
+        ground = float(terrain.height(body[0], body[1]))
+        if (
+            log.tilt[-1] > math.radians(FALL_TILT_DEG)
+            or body[2] - ground < FALL_HEIGHT_FRACTION * base.body_height
+        ):
+            return True
+        if settings.stop_at_goal and progress(body[:2]) >= progress(goal) - GOAL_TOLERANCE:
+            return True
+        if controller.state is GaitState.FROZEN:
+            frozen_since.append(log.time[-1])
+            return log.time[-1] - frozen_since[0] > FROZEN_TIMEOUT
+        frozen_since.clear()
+        return False
+
     wall_start = time.perf_counter()
     log = run_control_loop(
-        backend, controller, settings.command, settings.seconds, settings.control_rate_hz, on_tick
+        backend, controller, command, settings.seconds, settings.control_rate_hz, tick, stop
     )
     wall_seconds = time.perf_counter() - wall_start
+    if perception is not None:
+        perception.close()
     metrics = walk_metrics(
         log,
-        commanded_speed_mps=settings.command.speed,
+        commanded_speed_mps=base.speed,
         wall_seconds=wall_seconds,
         foot_radius=spec.foot_radius,
+        ground=terrain.height,
         frozen_reason=controller.frozen_reason,
     )
+    final = log.array("body_position_in_world")[-1, :2]
+    resolution = settings.map.resolution
+    truth = TrueScores(terrain, resolution, settings.score, (-1.0, float(goal[0]) + 1.0, -1.5, 1.5))
+    metrics.update(foothold_metrics(log, terrain, truth, spec.foot_radius))
     metrics.update(
         {
+            "reached_goal": bool(
+                progress(final) >= progress(goal) - GOAL_TOLERANCE and not metrics["fell"]
+            ),
+            "goal_distance_m": float(np.linalg.norm(goal - final)),
+            "footholds_adjusted": controller.footholds_adjusted,
+            "frozen": controller.state is GaitState.FROZEN,
+            "frozen_reason": controller.frozen_reason,
+            "blind": settings.blind,
             "robot": spec.name,
             "terrain": settings.terrain,
             "gait": settings.gait.kind.value,
             "seed": settings.seed,
             "control_rate_hz": settings.control_rate_hz,
-            "commanded_body_height_m": settings.command.body_height,
+            "commanded_body_height_m": base.body_height,
             "stride_m": controller.config.stride,
         }
     )
-    return WalkResult(log=log, metrics=metrics, warnings=backend.warnings())
+    if perception is not None:
+        metrics.update({"frames": perception.frames, **perception.timing()})
+    return WalkResult(
+        log=log,
+        metrics=metrics,
+        warnings=backend.warnings(),
+        terrain=terrain,
+        touchdowns=list(controller.touchdowns),
+        scores=perception.scores if perception is not None else None,
+    )

@@ -1,0 +1,1 @@
+"""Planning: footholds on the score map, the floor height, swing clearance."""

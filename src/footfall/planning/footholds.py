@@ -1,0 +1,197 @@
+"""Foothold search (thesis §6.3): the nearest valid, reachable, stable cell to a nominal one.
+
+The thesis grows square rings around the nominal cell and notes that this is inexact for
+large radii. Here the candidate offsets are precomputed once and sorted by true distance,
+so the first acceptable candidate is the nearest; candidates at the same distance are
+tried best score first.
+
+A candidate is acceptable when its cell is valid in the score map (known, kernel window
+known, score below threshold), the leg can reach it at the planned body pose, and the
+centre of mass stays inside the support polygon with a margin (§6.2.3). The foot height
+is the mapped height of the chosen cell (§6.4).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.errors import ConfigError
+from footfall.scoring.walkability import ScoreMap
+
+
+@dataclass(frozen=True)
+class FootholdConfig:
+    """Search settings.
+
+    Attributes:
+        search_radius: Farthest a foothold may move from its nominal position [m].
+        stability_margin: Least distance from the centre of mass to the edge of the support
+            polygon [m].
+        edge_margin_cells: A candidate must also have every cell within this many cells
+            valid: room for the foot's radius, tracking error and a map edge that is a cell
+            off (a riser seen face-on lends its height to the cell before it).
+    """
+
+    search_radius: float = 0.12
+    stability_margin: float = 0.02
+    edge_margin_cells: int = 2
+
+    def __post_init__(self) -> None:
+        if not self.search_radius >= 0 or self.stability_margin < 0 or self.edge_margin_cells < 0:
+            raise ConfigError("search_radius, stability_margin and edge_margin_cells must be >= 0")
+
+
+def sorted_offsets(radius_cells: float) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
+    """Cell offsets within a radius, nearest first.
+
+    Returns:
+        Offsets, shape (k, 2), and their distances [cells], shape (k,), ascending.
+    """
+    r = int(np.floor(radius_cells))
+    di, dj = np.meshgrid(np.arange(-r, r + 1), np.arange(-r, r + 1), indexing="ij")
+    offsets = np.stack([di.ravel(), dj.ravel()], axis=1)
+    distance = np.hypot(offsets[:, 0], offsets[:, 1])
+    keep = distance <= radius_cells + 1e-9
+    order = np.argsort(distance[keep], kind="stable")
+    return offsets[keep][order], distance[keep][order]
+
+
+def point_in_polygon_margin(point: npt.ArrayLike, polygon: npt.ArrayLike) -> float:
+    """Signed distance from a point to the edges of a convex polygon [m].
+
+    Positive inside (the distance to the nearest edge), negative outside. The polygon's
+    vertices may come in any order; their convex hull is used.
+
+    Args:
+        point: Shape (2,).
+        polygon: Vertices, shape (k, 2), k >= 3.
+    """
+    p = np.asarray(point, dtype=np.float64)
+    hull = _convex_hull(np.asarray(polygon, dtype=np.float64))
+    if len(hull) < 3:
+        return -np.inf
+    edges = np.roll(hull, -1, axis=0) - hull
+    normals = np.stack([edges[:, 1], -edges[:, 0]], axis=1)  # outward for counter-clockwise
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    return float(np.min(-np.einsum("ij,ij->i", p - hull, normals)))
+
+
+def _convex_hull(points: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """Counter-clockwise convex hull (monotone chain)."""
+    pts = np.unique(points, axis=0)
+    if len(pts) < 3:
+        return pts
+
+    def cross(o, a, b) -> float:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list = []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 1e-15:
+            lower.pop()
+        lower.append(p)
+    upper: list = []
+    for p in pts[::-1]:
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 1e-15:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def _eroded(valid: npt.NDArray[np.bool_], cells: int) -> npt.NDArray[np.bool_]:
+    """Cells whose whole (2 cells + 1) square neighbourhood is valid (off-map counts invalid)."""
+    out = valid.copy()
+    for _ in range(cells):
+        grown = out.copy()
+        grown[1:, :] &= out[:-1, :]
+        grown[:-1, :] &= out[1:, :]
+        grown[:, 1:] &= out[:, :-1]
+        grown[:, :-1] &= out[:, 1:]
+        grown[[0, -1], :] = False
+        grown[:, [0, -1]] = False
+        out = grown
+    return out
+
+
+@dataclass(frozen=True)
+class Foothold:
+    """A chosen foothold.
+
+    Attributes:
+        position: World position of the foot's ground point: cell centre and mapped height,
+            shape (3,) [m].
+        cell: Index ``[i, j]`` in the score map.
+        moved: Distance from the nominal position [m].
+        score: The cell's score.
+    """
+
+    position: npt.NDArray[np.float64]
+    cell: tuple[int, int]
+    moved: float
+    score: float
+
+
+class FootholdSearch:
+    """Nearest-acceptable-cell search on a score map.
+
+    Args:
+        config: Radius and stability margin.
+        resolution: Cell side of the maps it will search [m].
+    """
+
+    def __init__(self, config: FootholdConfig, resolution: float) -> None:
+        self.config = config
+        self.resolution = resolution
+        self.offsets, self.distances = sorted_offsets(config.search_radius / resolution)
+
+    def search(
+        self,
+        nominal_xy: npt.ArrayLike,
+        scores: ScoreMap,
+        heights: npt.NDArray[np.float64],
+        accept: Callable[[npt.NDArray[np.float64]], bool] | None = None,
+    ) -> Foothold | None:
+        """The nearest acceptable cell to a nominal foot position.
+
+        Args:
+            nominal_xy: Nominal foot position in the world, shape (2,) [m].
+            scores: Score map (validity per cell).
+            heights: Mapped heights aligned with ``scores``, NaN where unknown [m].
+            accept: Extra test of a candidate ground point (x, y, z): reachability,
+                stability. All candidates pass when None.
+
+        Returns:
+            The foothold, or None when no cell within the radius passes.
+        """
+        nominal = np.asarray(nominal_xy, dtype=np.float64)
+        res = scores.resolution
+        centre = np.floor((nominal - np.asarray(scores.origin)) / res).astype(np.int64)
+        cells = centre + self.offsets
+        n_i, n_j = scores.valid.shape
+        inside = (cells[:, 0] >= 0) & (cells[:, 0] < n_i) & (cells[:, 1] >= 0) & (cells[:, 1] < n_j)
+        cells, distances = cells[inside], self.distances[inside]
+        ok = _eroded(scores.valid, self.config.edge_margin_cells)[cells[:, 0], cells[:, 1]]
+        cells, distances = cells[ok], distances[ok]
+        if len(cells) == 0:
+            return None
+        cell_scores = scores.score[cells[:, 0], cells[:, 1]]
+        order = np.lexsort((cell_scores, np.round(distances, 9)))  # distance, then score
+        for k in order:
+            i, j = (int(v) for v in cells[k])
+            # The nominal cell keeps the nominal position (no adjustment); others their centre.
+            on_nominal = i == centre[0] and j == centre[1]
+            xy = (
+                nominal
+                if on_nominal
+                else np.asarray(scores.origin) + (np.array([i, j]) + 0.5) * res
+            )
+            point = np.array([xy[0], xy[1], heights[i, j]])
+            if accept is None or accept(point):
+                return Foothold(
+                    point, (i, j), float(np.hypot(*(xy - nominal))), float(cell_scores[k])
+                )
+        return None
