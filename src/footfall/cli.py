@@ -24,15 +24,23 @@ def _walk_parser(subparsers: argparse._SubParsersAction) -> None:
 
     p = subparsers.add_parser(
         "walk",
-        help="simulate the hexapod walking and measure it",
+        help="simulate the hexapod walking across a terrain and measure it",
         description=(
-            "Simulate the hexapod in MuJoCo walking straight ahead, then write metrics.json "
-            "and walk.png (body height, roll and pitch, and one foot's path) to --out."
+            "Simulate the hexapod in MuJoCo walking to the far end of a terrain with the full "
+            "loop: depth camera -> height map -> walkability scores -> footholds -> gait -> "
+            "joints (or --blind, the thesis' baseline). Writes metrics.json, walk.png (body "
+            "height, roll and pitch, one foot's path) and footholds.png (every foothold over "
+            "the score map) to --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--terrain", choices=TERRAINS, default="flat", help="terrain to walk on")
-    p.add_argument("--seconds", type=float, default=20.0, help="walking time in seconds")
+    p.add_argument("--terrain", choices=TERRAINS, default="stairs", help="terrain to cross")
+    p.add_argument(
+        "--seconds",
+        type=float,
+        default=60.0,
+        help="longest walking time in seconds; the walk ends at the goal",
+    )
     p.add_argument(
         "--speed",
         type=float,
@@ -49,6 +57,11 @@ def _walk_parser(subparsers: argparse._SubParsersAction) -> None:
         help=f"built-in robot ({', '.join(BUILTIN_ROBOTS)}) or a robot description TOML file",
     )
     p.add_argument(
+        "--blind",
+        action="store_true",
+        help="the thesis' baseline: no camera, nominal footholds on a flat floor, no feedback",
+    )
+    p.add_argument(
         "--swing",
         choices=("flow", "polynomial"),
         default="flow",
@@ -60,18 +73,27 @@ def _walk_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--stride", type=float, default=None, help="stride in m (robot's by default)")
     p.add_argument("--control-rate", type=float, default=100.0, help="controller rate in Hz")
     p.add_argument(
+        "--image-size",
+        type=int,
+        nargs=2,
+        metavar=("W", "H"),
+        default=(320, 240),
+        help="depth image size in pixels",
+    )
+    p.add_argument(
         "--seed",
         type=int,
         default=0,
-        help="seed for random terrain and sensor noise; runs with the same seed are identical",
+        help="seed of random terrains (cobblestones); runs with the same seed are identical",
     )
     p.add_argument("--out", type=Path, default=Path("footfall-out/walk"), help="output folder")
     p.set_defaults(handler=_walk)
 
 
 def _walk(args: argparse.Namespace, console: Console) -> int:
-    from footfall.plots import plot_walk
-    from footfall.sim.walk import WalkSettings, simulate_walk
+    from footfall.plots import plot_footholds, plot_walk
+    from footfall.sim.model import CameraMount
+    from footfall.sim.walk import TrueScores, WalkSettings, simulate_walk
 
     spec = load_spec(args.robot)
     gait = GaitConfig(kind=args.gait, swing=args.swing, stride_length=args.stride)
@@ -84,17 +106,22 @@ def _walk(args: argparse.Namespace, console: Console) -> int:
             "lower it or use a faster gait"
         )
     height = spec.body_height if args.height is None else args.height
+    width, image_height = args.image_size
     settings = WalkSettings(
         terrain=args.terrain,
         seconds=args.seconds,
         command=WalkCommand(speed=speed, body_height=height),
         gait=gait,
+        blind=args.blind,
+        camera=CameraMount(width=width, height=image_height),
         control_rate_hz=args.control_rate,
         seed=args.seed,
+        stop_at_goal=True,
     )
+    mode = "blind (thesis baseline)" if args.blind else "with camera, map and foothold planning"
     console.print(
-        f"Walking robot [bold]{spec.name}[/] on [bold]{args.terrain}[/] terrain: "
-        f"{args.gait} gait at {speed:.3f} m/s for {args.seconds:g} s"
+        f"Walking robot [bold]{spec.name}[/] across [bold]{args.terrain}[/] terrain, {mode}: "
+        f"{args.gait} gait at {speed:.3f} m/s, at most {args.seconds:g} s"
     )
     with Progress(
         TextColumn("simulating"),
@@ -112,19 +139,46 @@ def _walk(args: argparse.Namespace, console: Console) -> int:
     metrics = dict(result.metrics)
     metrics["mujoco_warnings"] = result.warnings
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
+    title = f"{spec.name}: {args.gait} gait at {speed:.3f} m/s on {args.terrain} terrain"
     plot_walk(
         result.log,
         out / "walk.png",
         leg=0,
         leg_name=spec.leg_names[0],
-        title=f"{spec.name}: {args.gait} gait at {speed:.3f} m/s on {args.terrain} terrain",
+        ground=result.terrain.height,
+        title=title + (" (blind)" if args.blind else ""),
+    )
+    path_xy = result.log.array("body_position_in_world")[:, :2]
+    if result.scores is not None:
+        scores = result.scores
+        background = (scores.score, scores.valid, scores.origin, scores.resolution)
+        label = "the robot's score map"
+    else:
+        goal_x = result.terrain.goal[0]
+        truth = TrueScores(
+            result.terrain, settings.map.resolution, settings.score, (-1.0, goal_x + 1.0, -1.5, 1.5)
+        )
+        background = (truth.score, truth.valid, truth.origin, truth.resolution)
+        label = "the true terrain's score map"
+    plot_footholds(
+        result.touchdowns,
+        *background,
+        out / "footholds.png",
+        path_xy,
+        title=f"footholds over {label}",
     )
     _print_summary(console, metrics)
-    if metrics["frozen"]:
-        console.print(f"[yellow]The robot froze safely:[/] {metrics['frozen_reason']}")
+    if metrics["reached_goal"]:
+        console.print(
+            f"[green]Reached the goal[/] with {metrics['invalid_footholds']} invalid footholds."
+        )
     elif metrics["fell"]:
         console.print("[red]The robot fell.[/]")
-    console.print(f"Wrote {out / 'metrics.json'} and {out / 'walk.png'}")
+    elif metrics["frozen"]:
+        console.print(f"[yellow]The robot froze safely:[/] {metrics['frozen_reason']}")
+    else:
+        console.print(f"Time ran out {metrics['goal_distance_m']:.2f} m short of the goal.")
+    console.print(f"Wrote {out / 'metrics.json'}, {out / 'walk.png'} and {out / 'footholds.png'}")
     return 0
 
 
@@ -145,6 +199,11 @@ def _print_summary(console: Console, metrics: dict[str, object]) -> None:
         ("stance slip max", "stance_slip_max_m", "{:.4f} m"),
         ("swing apex (median)", "swing_apex_median_m", "{:.3f} m"),
         ("steps", "steps", "{}"),
+        ("reached goal", "reached_goal", "{}"),
+        ("distance to goal", "goal_distance_m", "{:.3f} m"),
+        ("invalid footholds", "invalid_footholds", "{}"),
+        ("footholds adjusted", "footholds_adjusted", "{}"),
+        ("min swing clearance", "min_clearance_m", "{:.4f} m"),
         ("real-time factor", "realtime_factor", "{:.1f}x"),
     ]
     for label, key, fmt in rows:

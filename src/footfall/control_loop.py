@@ -35,6 +35,7 @@ class WalkLog:
         foot_orientations_in_world: Foot rotation matrices, shape (6, 3, 3) each (NaN if
             unknown).
         commanded_height: Commanded body height [m].
+        reference_body_z: The controller's body height in the world (floor + height) [m].
         state: Gait state name.
     """
 
@@ -49,6 +50,7 @@ class WalkLog:
     contact: list[npt.NDArray[np.bool_]] = field(default_factory=list)
     foot_orientations_in_world: list[npt.NDArray[np.float64]] = field(default_factory=list)
     commanded_height: list[float] = field(default_factory=list)
+    reference_body_z: list[float] = field(default_factory=list)
     state: list[str] = field(default_factory=list)
 
     def array(self, name: str) -> npt.NDArray:
@@ -112,6 +114,7 @@ def run_control_loop(
             else np.full((6, 3, 3), np.nan)
         )
         log.commanded_height.append(current.body_height)
+        log.reference_body_z.append(controller.height)
         log.state.append(controller.state.value)
         if on_tick is not None:
             on_tick(t + dt)

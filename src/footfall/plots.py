@@ -40,13 +40,17 @@ def plot_walk(
     body = log.array("body_position_in_world")
     height = body[:, 2] - ground(body[:, 0], body[:, 1])
     feet = log.array("feet_in_world")[:, leg]
+
     commanded_feet = log.array("feet_commanded_in_world")[:, leg]
 
     fig, axes = plt.subplots(4, 1, figsize=(9, 11), constrained_layout=True)
     ax = axes[0]
-    ax.plot(t, 100 * height, label="measured")
-    ax.plot(t, 100 * log.array("commanded_height"), "--", label="commanded")
-    ax.set_ylabel("body height [cm]")
+    ax.plot(t, 100 * body[:, 2], label="body z, measured")
+    ax.plot(
+        t, 100 * log.array("reference_body_z"), "--", label="body z, reference (floor + height)"
+    )
+    ax.plot(t, 100 * (body[:, 2] - height), color="0.5", lw=1, label="ground under the body")
+    ax.set_ylabel("height in the world [cm]")
     ax.set_xlabel("time [s]")
     ax.legend(loc="lower right")
     ax.grid(alpha=0.3)
@@ -208,6 +212,57 @@ def plot_score_map(
     )
     _draw_path(ax, path_xy, path_label)
     ax.set_title(f"{title} (red: invalid, grey: unknown)")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_footholds(
+    touchdowns: list,
+    score: np.ndarray,
+    valid: np.ndarray,
+    origin: tuple[float, float],
+    resolution: float,
+    path: Path,
+    path_xy: np.ndarray | None = None,
+    title: str = "footholds",
+) -> Path:
+    """Every touchdown over a score map, like thesis Fig. 6.8: nominal red, chosen green.
+
+    Args:
+        touchdowns: Records with ``nominal`` and ``chosen`` world positions.
+        score: Score map, shape (N, N); NaN unknown.
+        valid: Validity, shape (N, N).
+        origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
+        resolution: Cell side [m].
+        path: Output PNG.
+        path_xy: Body path, shape (n, 2) [m].
+        title: Figure title.
+    """
+    fig, ax = plt.subplots(figsize=(10, 6), constrained_layout=True)
+    extent = _map_axes(ax, np.isfinite(score), origin, resolution, path_xy)
+    ax.set_facecolor("0.75")
+    ax.imshow(np.ma.masked_invalid(score.T), origin="lower", extent=extent, cmap="gray", vmin=0.0,
+              vmax=1.0, interpolation="nearest")  # fmt: skip
+    invalid = np.where(np.isfinite(score) & ~valid, 1.0, np.nan)
+    ax.imshow(
+        invalid.T, origin="lower", extent=extent, cmap="autumn", alpha=0.35, interpolation="nearest"
+    )
+    if touchdowns:
+        nominal = np.array([t.nominal[:2] for t in touchdowns])
+        chosen = np.array([t.chosen[:2] for t in touchdowns])
+        for a, b in zip(nominal, chosen, strict=True):
+            if np.hypot(*(a - b)) > 1e-3:
+                ax.plot([a[0], b[0]], [a[1], b[1]], color="yellow", lw=0.8)
+        ax.plot(nominal[:, 0], nominal[:, 1], "x", color="red", ms=5, label="nominal foothold")
+        ax.plot(
+            chosen[:, 0], chosen[:, 1], "o", mfc="none", color="lime", ms=5, label="chosen foothold"
+        )
+    if path_xy is not None and len(path_xy):
+        ax.plot(path_xy[:, 0], path_xy[:, 1], color="cyan", lw=1.2, label="body path")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.set_title(f"{title} (score: dark is walkable, red invalid, grey unknown)")
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)

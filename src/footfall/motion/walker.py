@@ -47,6 +47,8 @@ if TYPE_CHECKING:
     from footfall.backend import RobotState
     from footfall.planning.terrain_planner import TerrainPlanner
 
+# A robot frozen for want of a foothold retries after this many new map frames.
+_MAP_FRAMES_BEFORE_RETRY = 5
 # Time step of the finite difference that gives the swing foot's velocity [s].
 _VELOCITY_PROBE_DT = 1e-3
 
@@ -114,6 +116,16 @@ class _StepPlan:
     pending_freeze: str = ""
 
 
+def _materially_different(a: WalkCommand, b: WalkCommand) -> bool:
+    """Whether a new command asks for something else, not just a steering wobble."""
+    va, vb = np.array(a.velocity_in_body), np.array(b.velocity_in_body)
+    return bool(
+        np.hypot(*(va - vb)) > 0.02
+        or abs(a.yaw_rate - b.yaw_rate) > 0.1
+        or abs(a.body_height - b.body_height) > 0.005
+    )
+
+
 class WalkController:
     """Turns walk commands into joint targets for a hexapod.
 
@@ -176,6 +188,9 @@ class WalkController:
         self._frozen_command: WalkCommand | None = None
         self._body_height_command = self.height
         self._start_of_walk = True
+        self._step_start_pose = self.pose
+        self._stalled_steps = 0
+        self._last_command: WalkCommand | None = None
         self._frozen_version = -1
         self._last_targets = self._solve(np.zeros((6, 3)), 0.0, 0.0)
 
@@ -202,7 +217,7 @@ class WalkController:
                 return self._last_targets
             self.state = GaitState.REST
             self.frozen_reason = ""
-            self._velocity, self._yaw_rate = (0.0, 0.0), 0.0
+            self._velocity, self._yaw_rate = (0.0, 0.0), 0.0  # start again from standstill
         if state is not None and self.feedback is not None:
             self._feedback(state, dt)
         self._shape_command(command, dt)
@@ -213,7 +228,7 @@ class WalkController:
         try:
             targets = self._solve(swing_velocity, *self._twist_scaled())
         except UnreachableTargetError as exc:
-            self._freeze(str(exc), command)
+            self._freeze(str(exc), command, map_may_help=False)
             return self._last_targets
         self._last_targets = targets
         if self.state is GaitState.FROZEN:
@@ -246,17 +261,32 @@ class WalkController:
             swing.transform(rotation, translation)
         self.pose = estimate
 
-    def _freeze(self, reason: str, command: WalkCommand | None = None) -> None:
+    def _freeze(
+        self, reason: str, command: WalkCommand | None = None, map_may_help: bool = True
+    ) -> None:
         self.state = GaitState.FROZEN
         self.frozen_reason = reason
         self._frozen_command = command
-        self._frozen_version = self.planner.version if self.planner is not None else -1
+        self._frozen_version = (
+            self.planner.version if self.planner is not None and map_may_help else -1
+        )
 
     def _may_resume(self, command: WalkCommand) -> bool:
-        """A frozen robot tries again when the command or the map has changed."""
-        if self._frozen_command is not None and command != self._frozen_command:
+        """Whether a frozen robot should try again.
+
+        It does when the command changes, or, when it froze for want of a foothold, when
+        the map has changed.
+        """
+        if self._frozen_command is not None and _materially_different(
+            command, self._frozen_command
+        ):
             return True
-        return self.planner is not None and self.planner.version != self._frozen_version
+        # Retry on a fresh map, a few frames on (a third of a second at 15 Hz).
+        return (
+            self._frozen_version >= 0
+            and self.planner is not None
+            and self.planner.version >= self._frozen_version + _MAP_FRAMES_BEFORE_RETRY
+        )
 
     def _feedback(self, state: RobotState, dt: float) -> None:
         """Integrate IMU roll and pitch, and the measured body height, into corrections.
@@ -305,6 +335,7 @@ class WalkController:
 
     # Command shaping ---------------------------------------------------------------------
     def _shape_command(self, command: WalkCommand, dt: float) -> None:
+        self._last_command = command
         self._body_height_command = command.body_height
         vx, vy = command.velocity_in_body
         speed = math.hypot(vx, vy)
@@ -332,8 +363,10 @@ class WalkController:
         changes; with a planner, whose footholds may sit off their nominal places, within
         the leg's workspace (checked by inverse kinematics at the predicted lift-off).
         """
-        if self.state is not GaitState.STEPPING:
-            return 1.0
+        if self.state is not GaitState.STEPPING or self._plan.pending_freeze:
+            # The body only travels while the legs step, and stops at once when a swinging
+            # foot has to go back to where it lifted off.
+            return 0.0
         n = len(self.config.groups)
         feet = self.feet_in_body()
         vx, vy = self._velocity
@@ -368,7 +401,8 @@ class WalkController:
         self, leg: int, foot: npt.NDArray[np.float64], u: npt.NDArray[np.float64]
     ) -> float:
         """Largest k in [0, 1] keeping the foot reachable after drifting by k u (bisection)."""
-        margin = self.planner.config.reach_margin if self.planner is not None else 0.0
+        # Half the planner's margin: the rest absorbs pose and feedback corrections.
+        margin = 0.5 * self.planner.config.reach_margin if self.planner is not None else 0.0
 
         def ok(k: float) -> bool:
             p = foot.copy()
@@ -429,6 +463,8 @@ class WalkController:
             self.swinging[:] = False
             self.steps_taken += 1
             self.state = GaitState.REST
+            if self._stalled():
+                return
             if self._plan.pending_freeze:
                 self._freeze(self._plan.pending_freeze)
                 self._plan.pending_freeze = ""
@@ -483,6 +519,7 @@ class WalkController:
         return swing
 
     def _start_step(self, t: float) -> None:
+        group_before, start_before = self._group_index, self._start_of_walk
         swing = self._choose_group()
         if not swing.any():
             return
@@ -493,10 +530,13 @@ class WalkController:
             else self.config.rest_step_duration
         )
         self.step_start = t
+        self._step_start_pose = self.pose
         nominal = self._nominal_targets(n)
         targets = self._plan_footholds(nominal, swing)
         if isinstance(targets, str):
-            self._freeze(targets)  # no step started: every foot is still down
+            # No step started: every foot is still down. The same group tries again later.
+            self._group_index, self._start_of_walk = group_before, start_before
+            self._freeze(targets)
             return
         self.swinging = swing
         self.state = GaitState.STEPPING
@@ -521,6 +561,32 @@ class WalkController:
                 )
         self._update_floor(targets)
 
+    def _stalled(self) -> bool:
+        """Freeze when, asked to move, the body has not advanced for two gait cycles.
+
+        The planner then finds footholds only where the feet already are: the way ahead
+        has none the legs can reach. The leg pulled back furthest from its nominal
+        foothold is named. Only a new command resumes the walk.
+        """
+        moved = math.hypot(
+            self.pose.x - self._step_start_pose.x, self.pose.y - self._step_start_pose.y
+        )
+        walking = math.hypot(*self._velocity) > 1e-3
+        self._stalled_steps = self._stalled_steps + 1 if walking and moved < 0.005 else 0
+        if self.planner is None or self._stalled_steps < 2 * len(self.config.groups):
+            return False
+        pulled = np.linalg.norm(self._plan.targets[:, :2] - self._plan.nominal[:, :2], axis=1)
+        leg = self.spec.leg_names[int(np.argmax(pulled))]
+        self._stalled_steps = 0
+        self._freeze(
+            f"leg {leg}: blocked, no valid foothold it can reach ahead "
+            f"(its nominal foothold is {pulled.max():.2f} m from the nearest acceptable cell; "
+            f"the body has not advanced for two gait cycles)",
+            self._last_command,
+            map_may_help=False,
+        )
+        return True
+
     def _support_after(self, swing: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
         """Legs that support during the step after this one (all but the next group)."""
         if self.config.kind is GaitKind.TRIPOD:
@@ -540,8 +606,10 @@ class WalkController:
             return nominal
         n = len(self.config.groups)
         remaining = max(self.step_start + self.step_duration - (self._time or 0.0), 0.0)
-        vx, vy = self.body_velocity_in_body
-        yaw_rate = self._yaw_rate * self._velocity_scale
+        # Check footholds against the commanded motion (not the governed one, which may be
+        # zero while the body waits): the body will travel that far if the legs allow.
+        vx, vy = self._velocity
+        yaw_rate = self._yaw_rate
 
         def pose_after(seconds: float) -> PlanarPose:
             return self.pose.moved((vx, vy), yaw_rate, seconds)

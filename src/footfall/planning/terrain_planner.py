@@ -37,7 +37,7 @@ class TerrainPlannerConfig:
     """
 
     footholds: FootholdConfig = field(default_factory=FootholdConfig)
-    reach_margin: float = 0.01
+    reach_margin: float = 0.02
     swing_clearance: float = 0.03
     body_clearance: float = 0.03
 

@@ -213,7 +213,10 @@ def _seed_start_area(
 
 
 def simulate_walk(
-    spec: HexapodSpec, settings: WalkSettings, on_tick: Callable[[float], None] | None = None
+    spec: HexapodSpec,
+    settings: WalkSettings,
+    on_tick: Callable[[float], None] | None = None,
+    terrain: Terrain | None = None,
 ) -> WalkResult:
     """Walk the robot across a terrain in MuJoCo, towards the terrain's goal.
 
@@ -221,11 +224,12 @@ def simulate_walk(
         spec: The robot.
         settings: What to simulate.
         on_tick: Progress callback, called with the walk time [s] after each control tick.
+        terrain: A terrain object to use instead of ``settings.terrain`` (custom terrains).
 
     Returns:
         The record, metrics and simulator warnings.
     """
-    terrain = make_terrain(settings.terrain, seed=settings.seed)
+    terrain = terrain or make_terrain(settings.terrain, seed=settings.seed)
     camera = None if settings.blind else settings.camera
     backend = MujocoHexapod(spec, terrain, camera, body_height=settings.command.body_height)
     backend.advance(settings.settle_seconds)
@@ -322,7 +326,7 @@ def simulate_walk(
             "frozen_reason": controller.frozen_reason,
             "blind": settings.blind,
             "robot": spec.name,
-            "terrain": settings.terrain,
+            "terrain": terrain.name,
             "gait": settings.gait.kind.value,
             "seed": settings.seed,
             "control_rate_hz": settings.control_rate_hz,

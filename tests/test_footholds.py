@@ -1,0 +1,112 @@
+"""Foothold search and the support-polygon test."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from footfall.planning.footholds import (
+    FootholdConfig,
+    FootholdSearch,
+    _eroded,
+    point_in_polygon_margin,
+    sorted_offsets,
+)
+from footfall.scoring.walkability import ScoreMap
+
+RES = 0.02
+
+
+def _score_map(valid: np.ndarray, score: np.ndarray) -> ScoreMap:
+    nan = np.full(valid.shape, np.nan)
+    return ScoreMap(nan, nan, score, valid, (0.0, 0.0), RES)
+
+
+@given(st.integers(0, 2**32 - 1), st.floats(0.0, 1.0), st.integers(0, 2))
+@settings(max_examples=150, deadline=None)
+def test_search_returns_the_nearest_acceptable_cell(seed, density, margin):
+    """Cross-check against brute force: the nearest valid (eroded) cell within the radius,
+    ties by score; never an invalid or unknown cell; None when there is none."""
+    rng = np.random.default_rng(seed)
+    valid = rng.uniform(size=(30, 30)) < density
+    score = rng.uniform(0, 0.5, (30, 30))
+    heights = rng.uniform(-0.05, 0.05, (30, 30))
+    heights[~valid & (rng.uniform(size=valid.shape) < 0.5)] = np.nan  # some unknown cells
+    config = FootholdConfig(search_radius=0.1, edge_margin_cells=margin)
+    search = FootholdSearch(config, RES)
+    nominal = rng.uniform(0.1, 0.5, 2)
+    found = search.search(nominal, _score_map(valid, score), heights)
+    usable = _eroded(valid, margin)
+    centre = np.floor(nominal / RES).astype(int)
+    best = None
+    for i in range(30):
+        for j in range(30):
+            d = np.hypot(i - centre[0], j - centre[1])
+            if usable[i, j] and d * RES <= 0.1 + 1e-9:
+                key = (round(d, 9), score[i, j])
+                if best is None or key < best[0]:
+                    best = (key, (i, j))
+    if best is None:
+        assert found is None
+    else:
+        assert found is not None and found.cell == best[1]
+        assert valid[found.cell]
+        assert found.position[2] == heights[found.cell]
+
+
+def test_valid_nominal_cell_keeps_the_nominal_position():
+    """If the nominal cell is acceptable the foothold is not adjusted (thesis Fig. 6.8)."""
+    valid = np.ones((20, 20), dtype=bool)
+    found = FootholdSearch(FootholdConfig(), RES).search(
+        [0.205, 0.193], _score_map(valid, np.zeros((20, 20))), np.zeros((20, 20))
+    )
+    assert found is not None and found.moved == 0.0
+    np.testing.assert_allclose(found.position[:2], [0.205, 0.193])
+
+
+def test_accept_callback_filters_candidates():
+    """Constraints (reach, stability) reject candidates; the next nearest is taken."""
+    valid = np.ones((20, 20), dtype=bool)
+    search = FootholdSearch(FootholdConfig(search_radius=0.1, edge_margin_cells=0), RES)
+    found = search.search([0.2, 0.2], _score_map(valid, np.zeros((20, 20))), np.zeros((20, 20)),
+                          accept=lambda p: p[0] < 0.17)  # fmt: skip
+    assert found is not None and found.position[0] < 0.17
+    assert found.moved == pytest.approx(0.2 - 0.15, abs=0.011)
+
+
+def test_offsets_are_in_order_of_true_distance():
+    """Candidates come nearest first (not in square rings)."""
+    offsets, distances = sorted_offsets(5.0)
+    assert np.all(np.diff(distances) >= 0)
+    np.testing.assert_allclose(distances, np.hypot(offsets[:, 0], offsets[:, 1]))
+    assert len(offsets) == np.sum(np.hypot(*np.mgrid[-5:6, -5:6]) <= 5.0)
+
+
+def _inside_triangle(p, a, b, c) -> bool:
+    def side(u, v, w):
+        return (v[0] - u[0]) * (w[1] - u[1]) - (v[1] - u[1]) * (w[0] - u[0])
+
+    s1, s2, s3 = side(a, b, p), side(b, c, p), side(c, a, p)
+    return (s1 > 0 and s2 > 0 and s3 > 0) or (s1 < 0 and s2 < 0 and s3 < 0)
+
+
+points = st.tuples(st.floats(-1, 1), st.floats(-1, 1)).map(np.array)
+
+
+@given(points, points, points, points)
+@settings(max_examples=300, deadline=None)
+def test_support_margin_agrees_with_point_in_triangle(p, a, b, c):
+    """The signed margin is positive exactly when the point is inside the triangle, and
+    never exceeds the distance to any edge line."""
+    area = abs((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+    if area < 1e-3:
+        return
+    margin = point_in_polygon_margin(p, np.stack([a, b, c]))
+    if abs(margin) < 1e-9:
+        return
+    assert (margin > 0) == _inside_triangle(p, a, b, c)
+    for u, v in ((a, b), (b, c), (c, a)):
+        d = abs((v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0])) / np.hypot(*(v - u))
+        assert margin <= d + 1e-9
