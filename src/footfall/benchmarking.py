@@ -122,3 +122,104 @@ def run_mapping_benchmark(repeats: int = 30, seed: int = 0) -> dict[str, float]:
         "score_speedup": baseline_score_ms / score_ms,
         "map_cells": config.size**2,
     }
+
+
+# The terrain sweep of `footfall bench terrain`: (terrain, difficulty name, values).
+TERRAIN_SWEEP: tuple[tuple[str, str, tuple[float, ...]], ...] = (
+    ("stairs", "rise", (0.02, 0.04, 0.06, 0.08)),
+    ("cobblestones", "groove", (0.01, 0.03, 0.06)),
+    ("course", "none", (0.0,)),
+)
+
+
+def _terrain_for(name: str, difficulty: str, value: float, seed: int):
+    """The swept terrain; the seed lays the cobblestones and shifts the stairs' start."""
+    from footfall.sim.terrain import Cobblestones, Course, Stairs
+
+    rng = np.random.default_rng(seed)
+    if name == "stairs":
+        return Stairs(rise=value, tread=0.25, start_x=0.6 + float(rng.uniform(-0.1, 0.1)))
+    if name == "cobblestones":
+        return Cobblestones(groove=value, seed=seed)
+    return Course()
+
+
+def run_terrain_benchmark(
+    seeds: int, seconds: float = 90.0, on_run: Callable[[str], None] | None = None
+) -> dict[str, object]:
+    """Planned and blind walking over the terrain sweep, ``seeds`` runs per configuration.
+
+    Success = reached the goal, no fall, zero invalid footholds.
+
+    Args:
+        seeds: Runs per terrain, difficulty and mode.
+        seconds: Longest walk [s].
+        on_run: Called with a label after each run (progress display).
+
+    Returns:
+        Per configuration: runs, successes, falls, invalid footholds, frozen runs, median
+        tilt, wall time; overall ``planned_success_rate`` and ``blind_success_rate``.
+    """
+    from footfall.robot.spec import load_spec
+    from footfall.sim.walk import WalkSettings, simulate_walk
+
+    spec = load_spec("default")
+    rows = []
+    totals = {"planned": [0, 0], "blind": [0, 0]}
+    for name, difficulty, values in TERRAIN_SWEEP:
+        for value in values:
+            for mode in ("planned", "blind"):
+                outcome = {
+                    "runs": 0,
+                    "successes": 0,
+                    "falls": 0,
+                    "invalid_footholds": 0,
+                    "frozen": 0,
+                }
+                tilts, wall = [], 0.0
+                for seed in range(seeds):
+                    terrain = _terrain_for(name, difficulty, value, seed)
+                    settings = WalkSettings(
+                        terrain=name,
+                        seconds=seconds,
+                        blind=mode == "blind",
+                        seed=seed,
+                        stop_at_goal=True,
+                    )
+                    m = simulate_walk(spec, settings, terrain=terrain).metrics
+                    success = (
+                        bool(m["reached_goal"]) and not m["fell"] and m["invalid_footholds"] == 0
+                    )
+                    outcome["runs"] += 1
+                    outcome["successes"] += success
+                    outcome["falls"] += bool(m["fell"])
+                    outcome["invalid_footholds"] += int(m["invalid_footholds"])
+                    outcome["frozen"] += bool(m["frozen"])
+                    tilts.append(float(m["tilt_max_deg"]))
+                    wall += float(m["wall_seconds"])
+                    totals[mode][0] += success
+                    totals[mode][1] += 1
+                    if on_run is not None:
+                        on_run(f"{name} {difficulty}={value:g} {mode} seed {seed}")
+                rows.append(
+                    {
+                        "terrain": name,
+                        "difficulty": difficulty,
+                        "value": value,
+                        "mode": mode,
+                        **outcome,
+                        "median_tilt_max_deg": float(np.median(tilts)),
+                        "wall_seconds": wall,
+                    }
+                )
+    return {
+        "seeds": seeds,
+        "results": rows,
+        "planned_success_rate": totals["planned"][0] / max(totals["planned"][1], 1),
+        "blind_success_rate": totals["blind"][0] / max(totals["blind"][1], 1),
+    }
+
+
+def terrain_benchmark_runs(seeds: int) -> int:
+    """How many walks :func:`run_terrain_benchmark` makes."""
+    return 2 * seeds * sum(len(values) for _, _, values in TERRAIN_SWEEP)

@@ -433,6 +433,24 @@ def _bench_parser(subparsers: argparse._SubParsersAction) -> None:
         "--out", type=Path, default=Path("footfall-out/bench"), help="output folder"
     )
     mapping.set_defaults(handler=_bench_mapping)
+    terrain = kinds.add_parser(
+        "terrain",
+        help="planned against blind walking over a difficulty sweep",
+        description=(
+            "Walk stairs (rise 0.02-0.08 m), cobblestones (groove 0.01-0.06 m) and the course, "
+            "planned and blind, --seeds runs each; writes bench.json and bench.png to --out. "
+            "Success = reached the goal, no fall, zero invalid footholds."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    terrain.add_argument(
+        "--seeds", type=int, default=10, help="runs per terrain, difficulty and mode"
+    )
+    terrain.add_argument("--seconds", type=float, default=90.0, help="longest walk in seconds")
+    terrain.add_argument(
+        "--out", type=Path, default=Path("footfall-out/bench-terrain"), help="output folder"
+    )
+    terrain.set_defaults(handler=_bench_terrain)
 
 
 def _bench_mapping(args: argparse.Namespace, console: Console) -> int:
@@ -448,6 +466,58 @@ def _bench_mapping(args: argparse.Namespace, console: Console) -> int:
         table.add_row(key, f"{value:,.3f}" if isinstance(value, float) else str(value))
     console.print(table)
     console.print(f"Wrote {args.out / 'bench.json'}")
+    return 0
+
+
+def _bench_terrain(args: argparse.Namespace, console: Console) -> int:
+    from footfall.benchmarking import run_terrain_benchmark, terrain_benchmark_runs
+    from footfall.plots import plot_terrain_benchmark
+
+    if args.seeds < 1:
+        raise FootfallError(f"--seeds must be at least 1, got {args.seeds}")
+    with Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total} walks"),
+        TimeRemainingColumn(),
+        console=console,
+    ) as progress:
+        task = progress.add_task("walking", total=terrain_benchmark_runs(args.seeds))
+        bench = run_terrain_benchmark(
+            args.seeds,
+            args.seconds,
+            on_run=lambda label: progress.update(task, advance=1, description=label),
+        )
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "bench.json").write_text(json.dumps(bench, indent=2) + "\n")
+    plot_terrain_benchmark(bench, args.out / "bench.png")
+    table = Table(title=f"terrain benchmark, {args.seeds} seeds")
+    for column in (
+        "terrain",
+        "difficulty",
+        "mode",
+        "success",
+        "falls",
+        "invalid",
+        "frozen",
+        "tilt (median)",
+    ):
+        table.add_column(column)
+    for r in bench["results"]:
+        table.add_row(
+            r["terrain"],
+            f"{r['difficulty']} {r['value']:g}" if r["difficulty"] != "none" else "-",
+            r["mode"],
+            f"{r['successes']}/{r['runs']}",
+            str(r["falls"]),
+            str(r["invalid_footholds"]),
+            str(r["frozen"]),
+            f"{r['median_tilt_max_deg']:.2f} deg",
+        )
+    console.print(table)
+    planned, blind = bench["planned_success_rate"], bench["blind_success_rate"]
+    rates = f"planned success {planned:.0%}, blind {blind:.0%}"
+    console.print(f"{rates}; wrote {args.out / 'bench.json'} and {args.out / 'bench.png'}")
     return 0
 
 

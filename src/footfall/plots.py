@@ -267,3 +267,33 @@ def plot_footholds(
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
+    """Success rate against difficulty for planned and blind walking, one panel a terrain."""
+    rows = bench["results"]
+    terrains = list(dict.fromkeys(r["terrain"] for r in rows))
+    fig, axes = plt.subplots(
+        1, len(terrains), figsize=(4.5 * len(terrains), 4), constrained_layout=True
+    )
+    for ax, terrain in zip(np.atleast_1d(axes), terrains, strict=True):
+        for mode, style in (("planned", "o-"), ("blind", "s--")):
+            sel = [r for r in rows if r["terrain"] == terrain and r["mode"] == mode]
+            x = [r["value"] for r in sel]
+            y = [r["successes"] / max(r["runs"], 1) for r in sel]
+            ax.plot(x, y, style, label=mode)
+        difficulty = next(r["difficulty"] for r in rows if r["terrain"] == terrain)
+        ax.set_title(terrain)
+        ax.set_xlabel(f"{difficulty} [m]" if difficulty != "none" else "(single layout)")
+        ax.set_ylabel("success rate")
+        ax.set_ylim(-0.05, 1.05)
+        ax.grid(alpha=0.3)
+        ax.legend()
+    fig.suptitle(
+        f"{bench['seeds']} seeds: planned {bench['planned_success_rate']:.0%}, "
+        f"blind {bench['blind_success_rate']:.0%} (success: goal, no fall, no invalid foothold)"
+    )
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
