@@ -26,13 +26,35 @@ WALK_KEYS = {
 def test_walk_writes_metrics_and_plot(tmp_path, capsys):
     """`footfall walk` writes metrics.json with the interface keys, and walk.png."""
     out = tmp_path / "walk"
-    code = main(["walk", "--seconds", "2", "--gait", "ripple", "--seed", "3", "--out", str(out)])
+    code = main(
+        [
+            "walk",
+            "--terrain",
+            "flat",
+            "--seconds",
+            "2",
+            "--gait",
+            "ripple",
+            "--seed",
+            "3",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0
     metrics = json.loads((out / "metrics.json").read_text())
     assert WALK_KEYS <= metrics.keys()
     assert metrics["gait"] == "ripple" and metrics["seed"] == 3
     assert metrics["sim_seconds"] == pytest.approx(2.0)
-    assert (out / "walk.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    for name in ("walk.png", "footholds.png"):
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert {
+        "reached_goal",
+        "invalid_footholds",
+        "footholds_adjusted",
+        "frozen",
+        "min_clearance_m",
+    } <= metrics.keys()
     printed = capsys.readouterr().out
     assert "walk summary" in printed and str(out / "metrics.json") in printed
 
@@ -67,7 +89,16 @@ def test_help_explains_every_walk_option():
     parser = build_parser()
     walk = parser._subparsers._group_actions[0].choices["walk"]
     help_text = walk.format_help()
-    for option in ("--terrain", "--seconds", "--speed", "--gait", "--robot", "--seed", "--out"):
+    for option in (
+        "--terrain",
+        "--seconds",
+        "--speed",
+        "--gait",
+        "--robot",
+        "--seed",
+        "--out",
+        "--blind",
+    ):
         assert option in help_text
     assert all(action.help for action in walk._actions)
 
