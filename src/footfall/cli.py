@@ -19,6 +19,18 @@ from footfall.robot.spec import BUILTIN_ROBOTS, load_spec
 DEFAULT_SPEED_MPS = 0.10
 
 
+def _sim_progress(console: Console) -> Progress:
+    """A progress bar over simulated seconds."""
+    return Progress(
+        TextColumn("simulating"),
+        BarColumn(),
+        TextColumn("{task.completed:.1f}/{task.total:.0f} s"),
+        TimeRemainingColumn(),
+        console=console,
+        transient=True,
+    )
+
+
 def _walk_parser(subparsers: argparse._SubParsersAction) -> None:
     from footfall.sim.walk import TERRAINS
 
@@ -123,14 +135,7 @@ def _walk(args: argparse.Namespace, console: Console) -> int:
         f"Walking robot [bold]{spec.name}[/] across [bold]{args.terrain}[/] terrain, {mode}: "
         f"{args.gait} gait at {speed:.3f} m/s, at most {args.seconds:g} s"
     )
-    with Progress(
-        TextColumn("simulating"),
-        BarColumn(),
-        TextColumn("{task.completed:.1f}/{task.total:.0f} s"),
-        TimeRemainingColumn(),
-        console=console,
-        transient=True,
-    ) as progress:
+    with _sim_progress(console) as progress:
         task = progress.add_task("walk", total=args.seconds)
         result = simulate_walk(spec, settings, on_tick=lambda t: progress.update(task, completed=t))
 
@@ -327,14 +332,7 @@ def _map(args: argparse.Namespace, console: Console) -> int:
             f"Mapping [bold]{args.terrain}[/] terrain for {args.seconds:g} s "
             f"({width}x{height} depth at {settings.camera.rate_hz:g} Hz, pose noise: {args.noise})"
         )
-        with Progress(
-            TextColumn("simulating"),
-            BarColumn(),
-            TextColumn("{task.completed:.1f}/{task.total:.0f} s"),
-            TimeRemainingColumn(),
-            console=console,
-            transient=True,
-        ) as progress:
+        with _sim_progress(console) as progress:
             task = progress.add_task("map", total=args.seconds)
             survey = simulate_mapping(
                 load_spec("default"), settings, on_tick=lambda t: progress.update(task, completed=t)

@@ -295,11 +295,6 @@ class _PolylineSwing:
         """Current touchdown target, shape (3,) [m]."""
         return self._path[-1].copy()
 
-    @property
-    def path(self) -> npt.NDArray[np.float64]:
-        """The path still ahead since the last (re)target, shape (n, 3) [m]."""
-        return self._path.copy()
-
     def position(self, t: float) -> npt.NDArray[np.float64]:
         """Foot position at ``t`` seconds after lift-off, shape (3,) [m]."""
         s = minimum_jerk(t / self.duration)

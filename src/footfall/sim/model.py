@@ -65,12 +65,6 @@ class CameraMount:
             0.5 * self.height / math.tan(0.5 * self.vertical_fov),
         )
 
-    def with_resolution(self, width: int, height: int) -> CameraMount:
-        """The same camera rendering at another image size."""
-        from dataclasses import replace
-
-        return replace(self, width=width, height=height)
-
     def mjcf(self) -> str:
         """The ``<camera>`` element (MuJoCo cameras look along -z with y up)."""
         fx, fy = self.focal_lengths
