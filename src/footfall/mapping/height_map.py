@@ -105,9 +105,9 @@ class MapSnapshot:
     Attributes:
         heights: Shape (N, N) [m]; NaN where unknown.
         known: Shape (N, N).
-        spread: Height range of the points in each cell in its latest frame, shape (N, N)
-            [m]; NaN where unknown. A cell that straddles an edge or a narrow groove has a
-            large spread even when its height looks flat.
+        spread: Largest height range of the points that fell in each cell in one frame,
+            shape (N, N) [m]; NaN where unknown. A cell that straddles an edge or a narrow
+            groove has a large spread even when its height looks flat.
         origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
         resolution: Cell side [m].
     """

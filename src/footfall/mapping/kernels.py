@@ -222,7 +222,11 @@ def fuse(
         i = touched[k] // n
         j = touched[k] % n
         z = frame_h[i, j]
-        spread[i, j] = z - frame_lo[i, j]  # latest frame's height range inside the cell
+        # The largest height range seen inside the cell: an edge or a groove shows itself in
+        # some views and hides (occluded) in others.
+        frame_spread = z - frame_lo[i, j]
+        if not known[i, j] or frame_spread > spread[i, j]:
+            spread[i, j] = frame_spread
         if not known[i, j]:
             heights[i, j] = z
             s = range_noise * frame_r2[i, j]

@@ -9,7 +9,7 @@
 
 A cell is valid when it is known, every cell its kernel reaches is known (and inside
 the map), ``S_g + S_p`` is below the threshold and, for a mapped cell, the points that
-fell in it in its latest frame span less than ``max_cell_spread`` in height (a cell
+fell in it within one frame never spanned more than ``max_cell_spread`` in height (a cell
 straddling an edge, or a groove narrower than the grid, hides in its maximum but not in
 its spread). Defaults reproduce thesis
 Figs. 6.6-6.8 on the course terrain: box tops, the ramp and the floor valid; box edges,
@@ -40,8 +40,8 @@ class ScoreConfig:
         kernel_size: ``n``, side of the proximity window [cells]; odd.
         kernel_sigma: Standard deviation of the Gaussian ``K`` [cells].
         threshold: Cells scoring at or above this are invalid.
-        max_cell_spread: A cell whose points span more height than this in its latest frame
-            straddles an edge or a groove too narrow for the grid, and is invalid [m].
+        max_cell_spread: A cell whose points have spanned more height than this within one
+            frame straddles an edge or a groove too narrow for the grid, and is invalid [m].
     """
 
     slope_weight: float = 1.0
