@@ -1,0 +1,1 @@
+"""The biped (humanoid) side: walking pattern of the Linear Inverted Pendulum."""
