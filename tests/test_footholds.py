@@ -70,8 +70,12 @@ def test_accept_callback_filters_candidates():
     """Constraints (reach, stability) reject candidates; the next nearest is taken."""
     valid = np.ones((20, 20), dtype=bool)
     search = FootholdSearch(FootholdConfig(search_radius=0.1, edge_margin_cells=0), RES)
-    found = search.search([0.2, 0.2], _score_map(valid, np.zeros((20, 20))), np.zeros((20, 20)),
-                          accept=lambda p: p[0] < 0.17)  # fmt: skip
+    found = search.search(
+        [0.2, 0.2],
+        _score_map(valid, np.zeros((20, 20))),
+        np.zeros((20, 20)),
+        accept=lambda p: p[0] < 0.17,
+    )
     assert found is not None and found.position[0] < 0.17
     assert found.moved == pytest.approx(0.2 - 0.15, abs=0.011)
 

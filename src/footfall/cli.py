@@ -519,6 +519,52 @@ def _bench_terrain(args: argparse.Namespace, console: Console) -> int:
     return 0
 
 
+def _plan_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "plan",
+        help="plan a biped's path, footsteps and centre-of-mass pattern around obstacles",
+        description=(
+            "Plan the humanoid's walk (dissertation §6.3): a path around circular obstacles, "
+            "footsteps along it and the Linear Inverted Pendulum pattern over them. Writes "
+            "plan.json and plan.png to --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    source = p.add_mutually_exclusive_group(required=True)
+    source.add_argument("--map", type=Path, help="a JSON map file (see footfall.biped.maps)")
+    source.add_argument("--case", type=int, help="one of the dissertation's 11 test maps")
+    p.add_argument(
+        "--start", type=float, nargs=2, metavar=("X", "Y"), help="start instead of the map's [m]"
+    )
+    p.add_argument(
+        "--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal instead of the map's [m]"
+    )
+    p.add_argument("--out", type=Path, default=Path("footfall-out/plan"), help="output folder")
+    p.set_defaults(handler=_plan)
+
+
+def _plan(args: argparse.Namespace, console: Console) -> int:
+    from footfall.biped.maps import dissertation_map, load_map
+    from footfall.biped.planner import plan_walk
+    from footfall.plots import plot_plan
+
+    plan_map = load_map(args.map) if args.map is not None else dissertation_map(args.case)
+    plan_map = plan_map.with_endpoints(args.start, args.goal)
+    plan = plan_walk(plan_map)
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "plan.json").write_text(json.dumps(plan.to_json(), indent=2) + "\n")
+    plot_plan(plan, out / "plan.png")
+    console.print(
+        f"{plan_map.name}: path {plan.path.length:.2f} m, "
+        f"{len(plan.path.waypoints) - 2} waypoints, "
+        f"{len(plan.footsteps.positions)} footsteps, planned in {plan.plan_ms:.2f} ms, "
+        f"{plan.collisions} collisions"
+    )
+    console.print(f"Wrote {out / 'plan.json'} and {out / 'plan.png'}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``footfall`` argument parser."""
     parser = argparse.ArgumentParser(
@@ -530,6 +576,7 @@ def build_parser() -> argparse.ArgumentParser:
     _map_parser(subparsers)
     _convert_parser(subparsers)
     _bench_parser(subparsers)
+    _plan_parser(subparsers)
     return parser
 
 

@@ -40,3 +40,7 @@ class InvalidPoseError(FootfallError, ValueError):
 
 class DatasetError(FootfallError, ValueError):
     """A recorded sequence is missing files or holds malformed entries."""
+
+
+class PlanningError(FootfallError, ValueError):
+    """A path cannot be planned: the start or goal lies in an obstacle, or no path exists."""

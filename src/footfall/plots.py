@@ -243,8 +243,15 @@ def plot_footholds(
     fig, ax = plt.subplots(figsize=(10, 6), constrained_layout=True)
     extent = _map_axes(ax, np.isfinite(score), origin, resolution, path_xy)
     ax.set_facecolor("0.75")
-    ax.imshow(np.ma.masked_invalid(score.T), origin="lower", extent=extent, cmap="gray", vmin=0.0,
-              vmax=1.0, interpolation="nearest")  # fmt: skip
+    ax.imshow(
+        np.ma.masked_invalid(score.T),
+        origin="lower",
+        extent=extent,
+        cmap="gray",
+        vmin=0.0,
+        vmax=1.0,
+        interpolation="nearest",
+    )
     invalid = np.where(np.isfinite(score) & ~valid, 1.0, np.nan)
     ax.imshow(
         invalid.T, origin="lower", extent=extent, cmap="autumn", alpha=0.35, interpolation="nearest"
@@ -292,6 +299,75 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
     fig.suptitle(
         f"{bench['seeds']} seeds: planned {bench['planned_success_rate']:.0%}, "
         f"blind {bench['blind_success_rate']:.0%} (success: goal, no fall, no invalid foothold)"
+    )
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_plan(plan, path: Path, title: str = "") -> Path:
+    """Top view of a biped plan in the dissertation's colours.
+
+    Obstacles red with their inflated outline, path blue, footsteps green, the COM black.
+
+    Args:
+        plan: A :class:`footfall.biped.planner.WalkPlan`.
+        path: Output PNG.
+        title: Figure title.
+    """
+    from matplotlib.patches import Circle as CirclePatch
+    from matplotlib.patches import Rectangle
+
+    from footfall.biped.planner import FOOT_LENGTH, FOOT_WIDTH
+
+    m = plan.map
+    fig, ax = plt.subplots(figsize=(8, 8), constrained_layout=True)
+    for c, grown in zip(m.obstacles, m.inflated, strict=True):
+        ax.add_patch(CirclePatch((c.x, c.y), c.r, color="red", alpha=0.6))
+        ax.add_patch(
+            CirclePatch((grown.x, grown.y), grown.r, fill=False, ls="--", color="red", lw=0.8)
+        )
+    for p, h in zip(plan.footsteps.positions, plan.footsteps.headings, strict=True):
+        corner = p - np.array([[np.cos(h), -np.sin(h)], [np.sin(h), np.cos(h)]]) @ [
+            FOOT_LENGTH / 2,
+            FOOT_WIDTH / 2,
+        ]
+        ax.add_patch(
+            Rectangle(
+                tuple(corner),
+                FOOT_LENGTH,
+                FOOT_WIDTH,
+                angle=float(np.degrees(h)),
+                fill=False,
+                color="green",
+                lw=1.0,
+            )
+        )
+    w = plan.path.waypoints
+    ax.plot(
+        w[:, 0], w[:, 1], "-o", color="blue", ms=4, lw=1.5, label=f"path {plan.path.length:.2f} m"
+    )
+    ax.plot(
+        plan.pattern.com[:, 0],
+        plan.pattern.com[:, 1],
+        color="black",
+        lw=0.8,
+        label="centre of mass",
+    )
+    ax.plot(*m.start, "s", color="blue", ms=8, label="start")
+    ax.plot(*m.goal, "*", color="blue", ms=12, label="goal")
+    ax.plot([], [], color="green", label="footsteps")
+    ax.plot([], [], color="red", alpha=0.6, lw=6, label="obstacles (dashed: inflated)")
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(
+        title
+        or f"{m.name}: {len(plan.footsteps.positions)} footsteps, planned in {plan.plan_ms:.1f} ms"
     )
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)

@@ -90,7 +90,7 @@ def _rotation(angle: float) -> npt.NDArray[np.float64]:
 
 
 def walk_primitive(
-    step: WalkParameter, n: int, config: LipmConfig
+    step: WalkParameter, n: int, config: LipmConfig, side: int = 1
 ) -> tuple[npt.NDArray, npt.NDArray]:
     """Terminal position and velocity of the n-th walk primitive (eqs. 13-14, 25-26).
 
@@ -98,13 +98,15 @@ def walk_primitive(
         step: The walk parameter of step ``n + 1``.
         n: Step index.
         config: Pendulum settings.
+        side: +1 when step 1 goes to the left of step 0 (Kajita's convention), -1 when it
+            goes to the right.
 
     Returns:
         ``(x_bar, v_bar)``, each shape (2,): in the ground frame [m], [m/s].
     """
     c, s = config.c_s
     tc = config.time_constant
-    bar = np.array([0.5 * step.length, (-1) ** n * 0.5 * step.width])
+    bar = np.array([0.5 * step.length, side * (-1) ** n * 0.5 * step.width])
     velocity = np.array([(c + 1.0) / (tc * s) * bar[0], (c - 1.0) / (tc * s) * bar[1]])
     r = _rotation(step.heading)
     return r @ bar, r @ velocity
@@ -150,18 +152,26 @@ def lipm_pattern(
     config: LipmConfig | None = None,
     initial_com: npt.ArrayLike = (0.0, 0.0),
     initial_velocity: npt.ArrayLike = (0.0, 0.0),
+    first_foot: npt.ArrayLike = (0.0, 0.0),
+    first_step_left: bool = True,
+    footsteps: npt.ArrayLike | None = None,
 ) -> LipmPattern:
     """The COM trajectory for a sequence of walk parameters (Kajita's algorithm).
 
-    Step 0's parameter places the first support foot (usually ``s_x = 0``); each later
-    step ``n`` puts foot ``n`` at ``p(n-1) + R(s_theta) [s_x, -(-1)^n s_y]``. The final
-    parameter is usually ``s_x = 0`` as well, bringing the feet together.
+    Step 0's parameter goes with the first support foot, at ``first_foot``; each later
+    step ``n`` puts foot ``n`` at ``p(n-1) + R(s_theta) [s_x, -(-1)^n s_y]`` (eq. 96), or
+    its mirror image when the first step goes to the right. The final parameter is
+    usually ``s_x = 0``, bringing the feet side by side.
 
     Args:
         steps: Walk parameters, one per support phase plus the closing one.
         config: Pendulum settings.
         initial_com: COM position at the start, shape (2,) [m].
         initial_velocity: COM velocity at the start, shape (2,) [m/s].
+        first_foot: Position of the first support foot, shape (2,) [m].
+        first_step_left: Whether step 1 goes to the left of the first support foot.
+        footsteps: Footstep positions, shape (len(steps), 2) [m], to use instead of eq. 96
+            (for footsteps laid out around a COM path, eqs. 97-98).
 
     Returns:
         The pattern: COM samples every ``dt`` and the nominal and modified footsteps.
@@ -178,7 +188,11 @@ def lipm_pattern(
     d = a * (cc - 1.0) ** 2 + b * (ss / tc) ** 2
     x = np.asarray(initial_com, dtype=np.float64)
     v = np.asarray(initial_velocity, dtype=np.float64)
-    foot = np.zeros(2)
+    side = 1 if first_step_left else -1
+    given = None if footsteps is None else np.asarray(footsteps, dtype=np.float64)
+    if given is not None and given.shape != (len(steps), 2):
+        raise ConfigError(f"footsteps must have shape ({len(steps)}, 2), got {given.shape}")
+    foot = (np.asarray(first_foot, dtype=np.float64) if given is None else given[0]).copy()
     modified = foot.copy()
     nominal, placed, headings = [foot.copy()], [modified.copy()], [steps[0].heading]
     times, coms, velocities = [], [], []
@@ -193,11 +207,16 @@ def lipm_pattern(
         # Next footstep from the walk parameters, and the walk primitive it begins (eqs. 13-14).
         step = steps[n + 1]
         k = n + 1
-        foot = foot + _rotation(step.heading) @ np.array([step.length, -((-1) ** k) * step.width])
+        if given is None:
+            foot = foot + _rotation(step.heading) @ np.array(
+                [step.length, -side * ((-1) ** k) * step.width]
+            )
+        else:
+            foot = given[k].copy()
         nominal.append(foot.copy())
         headings.append(step.heading)
         following = steps[k + 1] if k + 1 < len(steps) else WalkParameter(0.0, 0.0, step.heading)
-        bar, v_bar = walk_primitive(following, k, c)
+        bar, v_bar = walk_primitive(following, k, c, side)
         target_x, target_v = foot + bar, v_bar
         # Modified foot placement (eq. 24), per axis.
         modified = -a * (cc - 1.0) / d * (target_x - cc * x - tc * ss * v) - b * ss / (tc * d) * (
