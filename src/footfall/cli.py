@@ -533,6 +533,10 @@ def _plan_parser(subparsers: argparse._SubParsersAction) -> None:
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--map", type=Path, help="a JSON map file (see footfall.biped.maps)")
     source.add_argument("--case", type=int, help="one of the dissertation's 11 test maps")
+    source.add_argument(
+        "--cloud", type=Path, help="a point cloud (.pcd, .ply, .npy): detect obstacles, then plan"
+    )
+    _cloud_options(p)
     p.add_argument(
         "--start", type=float, nargs=2, metavar=("X", "Y"), help="start instead of the map's [m]"
     )
@@ -548,8 +552,17 @@ def _plan(args: argparse.Namespace, console: Console) -> int:
     from footfall.biped.planner import plan_walk
     from footfall.plots import plot_plan
 
-    plan_map = load_map(args.map) if args.map is not None else dissertation_map(args.case)
-    plan_map = plan_map.with_endpoints(args.start, args.goal)
+    if args.cloud is not None:
+        from footfall.biped.maps import PlanMap
+
+        if args.goal is None:
+            raise FootfallError("planning on a point cloud needs --goal X Y")
+        detection = _detect(args)
+        start = (0.0, 0.0) if args.start is None else tuple(args.start)
+        plan_map = PlanMap(args.cloud.stem, start, tuple(args.goal), tuple(detection.circles))
+    else:
+        plan_map = load_map(args.map) if args.map is not None else dissertation_map(args.case)
+        plan_map = plan_map.with_endpoints(args.start, args.goal)
     plan = plan_walk(plan_map)
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
@@ -565,6 +578,97 @@ def _plan(args: argparse.Namespace, console: Console) -> int:
     return 0
 
 
+def _cloud_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--frame",
+        choices=("camera", "map"),
+        default="camera",
+        help="frame the cloud's points are in",
+    )
+    p.add_argument(
+        "--ground",
+        choices=("plane", "ransac", "cone"),
+        default="plane",
+        help="ground removal: known plane z = 0, RANSAC's dominant plane, or inverted cones",
+    )
+    p.add_argument(
+        "--camera-height", type=float, default=0.0, help="camera height above the ground in m"
+    )
+    p.add_argument(
+        "--cluster-tolerance", type=float, default=0.30, help="Euclidean clustering radius in m"
+    )
+    p.add_argument("--min-cluster-size", type=int, default=5, help="smallest obstacle in points")
+
+
+def _detect(args: argparse.Namespace):
+    from footfall.biped.obstacles import DetectionConfig, detect_obstacles
+    from footfall.io.clouds import read_points
+
+    points = read_points(args.cloud)
+    config = DetectionConfig(
+        ground=args.ground,
+        cluster_tolerance=args.cluster_tolerance,
+        min_cluster_size=args.min_cluster_size,
+    )
+    return detect_obstacles(
+        points, args.frame, config, camera_in_base=(0.0, 0.0, args.camera_height)
+    )
+
+
+def _obstacles_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "obstacles",
+        help="detect obstacles in a point cloud",
+        description=(
+            "Detect obstacles in a point cloud (dissertation §6.3.1): pass-through filter, ground "
+            "removal, Euclidean clustering, principal-axes boxes and circles. Writes "
+            "obstacles.json and obstacles.png (top view) to --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("--cloud", type=Path, required=True, help="point cloud file (.pcd, .ply, .npy)")
+    _cloud_options(p)
+    p.add_argument("--out", type=Path, default=Path("footfall-out/obstacles"), help="output folder")
+    p.set_defaults(handler=_obstacles)
+
+
+def _obstacles(args: argparse.Namespace, console: Console) -> int:
+    from footfall.plots import plot_obstacles
+
+    detection = _detect(args)
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    clusters = [
+        {
+            "centroid": c.centroid.tolist(),
+            "box": {
+                "x": float(c.centre[0]),
+                "y": float(c.centre[1]),
+                "width": c.width,
+                "depth": c.depth,
+                "height": c.height,
+                "yaw_rad": c.yaw,
+            },
+            "points": c.points,
+            "circles": [{"x": k.x, "y": k.y, "r": k.r} for k in c.circles],
+        }
+        for c in detection.clusters
+    ]
+    summary = {
+        "cloud": str(args.cloud),
+        "frame": args.frame,
+        "ground": args.ground,
+        "points": len(detection.points_in_map),
+        "obstacle_points": int(detection.obstacle_mask.sum()),
+        "clusters": clusters,
+    }
+    (out / "obstacles.json").write_text(json.dumps(summary, indent=2) + "\n")
+    plot_obstacles(detection, out / "obstacles.png")
+    console.print(f"{len(clusters)} obstacles from {len(detection.points_in_map)} points")
+    console.print(f"Wrote {out / 'obstacles.json'} and {out / 'obstacles.png'}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``footfall`` argument parser."""
     parser = argparse.ArgumentParser(
@@ -577,6 +681,7 @@ def build_parser() -> argparse.ArgumentParser:
     _convert_parser(subparsers)
     _bench_parser(subparsers)
     _plan_parser(subparsers)
+    _obstacles_parser(subparsers)
     return parser
 
 

@@ -373,3 +373,38 @@ def plot_plan(plan, path: Path, title: str = "") -> Path:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def plot_obstacles(detection, path: Path) -> Path:
+    """Top view of a detection.
+
+    Ground points grey, obstacle points blue, each cluster's circles in red.
+
+    Args:
+        detection: A :class:`footfall.biped.obstacles.Detection`.
+        path: Output PNG.
+    """
+    from matplotlib.patches import Circle as CirclePatch
+
+    p = detection.points_in_map
+    step = max(1, len(p) // 60000)
+    fig, ax = plt.subplots(figsize=(8, 8), constrained_layout=True)
+    ground = p[~detection.obstacle_mask][::step]
+    ax.scatter(ground[:, 0], ground[:, 1], s=0.3, color="0.75", label="ground / removed")
+    obstacle = p[detection.obstacle_mask][::step]
+    ax.scatter(obstacle[:, 0], obstacle[:, 1], s=0.3, color="tab:blue", label="obstacle points")
+    for cluster in detection.clusters:
+        for c in cluster.circles:
+            ax.add_patch(CirclePatch((c.x, c.y), c.r, fill=False, color="red", lw=1.2))
+        ax.plot(*cluster.centroid[:2], "+", color="red")
+    ax.plot([], [], color="red", label=f"{len(detection.clusters)} obstacles (circles)")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8, markerscale=10)
+    ax.set_title("obstacles seen from above")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
