@@ -125,3 +125,20 @@ def test_corrupt_lzf_is_an_error():
     """A back reference before the start of the output is refused."""
     with pytest.raises(ValueError, match="corrupt"):
         lzf_decompress(np.array([0x20, 0x05], dtype=np.uint8), 10)
+
+
+def test_ply_clouds_read(tmp_path):
+    """PLY files (binary and ascii) give back their vertices."""
+    from plyfile import PlyData, PlyElement
+
+    from footfall.io.clouds import read_points
+
+    points = np.random.default_rng(1).normal(size=(20, 3)).astype(np.float32)
+    vertex = np.array([tuple(p) for p in points], dtype=[("x", "f4"), ("y", "f4"), ("z", "f4")])
+    for text in (False, True):
+        path = tmp_path / f"cloud_{text}.ply"
+        PlyData([PlyElement.describe(vertex, "vertex")], text=text).write(str(path))
+        np.testing.assert_allclose(read_points(path), points, rtol=1e-6)
+    (tmp_path / "x.txt").write_text("1 2 3")
+    with pytest.raises(DatasetError, match="unknown point cloud format"):
+        read_points(tmp_path / "x.txt")
