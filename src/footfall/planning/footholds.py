@@ -36,7 +36,7 @@ class FootholdConfig:
             off (a riser seen face-on lends its height to the cell before it).
     """
 
-    search_radius: float = 0.12
+    search_radius: float = 0.16
     stability_margin: float = 0.02
     edge_margin_cells: int = 2
 
