@@ -15,6 +15,14 @@ from footfall.control_loop import WalkLog
 from footfall.metrics import GroundHeight, flat_ground
 
 
+def _save(fig, path: Path) -> Path:
+    """Write a figure as a PNG (creating its folder) and release it."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def plot_walk(
     log: WalkLog,
     path: Path,
@@ -87,10 +95,7 @@ def plot_walk(
     ax.grid(alpha=0.3)
     if title:
         fig.suptitle(title)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def _map_axes(
@@ -161,10 +166,7 @@ def plot_height_map(
     fig.colorbar(image, ax=ax, label="height [m]", shrink=0.8)
     _draw_path(ax, path_xy, path_label)
     ax.set_title(f"{title} (grey: unknown)")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_score_map(
@@ -212,10 +214,7 @@ def plot_score_map(
     )
     _draw_path(ax, path_xy, path_label)
     ax.set_title(f"{title} (red: invalid, grey: unknown)")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_footholds(
@@ -270,10 +269,7 @@ def plot_footholds(
         ax.plot(path_xy[:, 0], path_xy[:, 1], color="cyan", lw=1.2, label="body path")
     ax.legend(loc="upper right", fontsize=8)
     ax.set_title(f"{title} (score: dark is walkable, red invalid, grey unknown)")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
@@ -300,10 +296,7 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
         f"{bench['seeds']} seeds: planned {bench['planned_success_rate']:.0%}, "
         f"blind {bench['blind_success_rate']:.0%} (success: goal, no fall, no invalid foothold)"
     )
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_plan(plan, path: Path, title: str = "") -> Path:
@@ -369,10 +362,7 @@ def plot_plan(plan, path: Path, title: str = "") -> Path:
         title
         or f"{m.name}: {len(plan.footsteps.positions)} footsteps, planned in {plan.plan_ms:.1f} ms"
     )
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_obstacles(detection, path: Path) -> Path:
@@ -404,7 +394,4 @@ def plot_obstacles(detection, path: Path) -> Path:
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8, markerscale=10)
     ax.set_title("obstacles seen from above")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
