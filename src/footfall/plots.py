@@ -124,6 +124,26 @@ def _map_axes(
     return extent
 
 
+def _grid(ax, values: np.ndarray, extent: list[float], **style):
+    """Draw a map grid (index ``[i, j]`` along x and y) with unknown (NaN) cells left blank."""
+    return ax.imshow(
+        np.ma.masked_invalid(values.T),
+        origin="lower",
+        extent=extent,
+        interpolation="nearest",
+        **style,
+    )
+
+
+def _invalid_overlay(
+    ax, score: np.ndarray, valid: np.ndarray, extent: list[float], alpha: float
+) -> None:
+    """Tint the known cells that are not valid footholds red."""
+    _grid(
+        ax, np.where(np.isfinite(score) & ~valid, 1.0, np.nan), extent, cmap="autumn", alpha=alpha
+    )
+
+
 def _draw_path(ax, path_xy: np.ndarray | None, label: str) -> None:
     if path_xy is None or len(path_xy) == 0:
         return
@@ -156,13 +176,7 @@ def plot_height_map(
     fig, ax = plt.subplots(figsize=(8, 7), constrained_layout=True)
     extent = _map_axes(ax, np.isfinite(heights), origin, resolution, path_xy)
     ax.set_facecolor("0.75")
-    image = ax.imshow(
-        np.ma.masked_invalid(heights.T),
-        origin="lower",
-        extent=extent,
-        cmap="terrain",
-        interpolation="nearest",
-    )
+    image = _grid(ax, heights, extent, cmap="terrain")
     fig.colorbar(image, ax=ax, label="height [m]", shrink=0.8)
     _draw_path(ax, path_xy, path_label)
     ax.set_title(f"{title} (grey: unknown)")
@@ -196,22 +210,11 @@ def plot_score_map(
     fig, ax = plt.subplots(figsize=(8, 7), constrained_layout=True)
     extent = _map_axes(ax, np.isfinite(score), origin, resolution, path_xy)
     ax.set_facecolor("0.75")
-    image = ax.imshow(
-        np.ma.masked_invalid(score.T),
-        origin="lower",
-        extent=extent,
-        cmap="gray",
-        vmin=0.0,
-        vmax=2.0 * threshold,
-        interpolation="nearest",
-    )
+    image = _grid(ax, score, extent, cmap="gray", vmin=0.0, vmax=2.0 * threshold)
     fig.colorbar(
         image, ax=ax, label=f"score (lower is better; invalid at >= {threshold:g})", shrink=0.8
     )
-    invalid = np.where(np.isfinite(score) & ~valid, 1.0, np.nan)
-    ax.imshow(
-        invalid.T, origin="lower", extent=extent, cmap="autumn", alpha=0.45, interpolation="nearest"
-    )
+    _invalid_overlay(ax, score, valid, extent, 0.45)
     _draw_path(ax, path_xy, path_label)
     ax.set_title(f"{title} (red: invalid, grey: unknown)")
     return _save(fig, path)
@@ -242,19 +245,8 @@ def plot_footholds(
     fig, ax = plt.subplots(figsize=(10, 6), constrained_layout=True)
     extent = _map_axes(ax, np.isfinite(score), origin, resolution, path_xy)
     ax.set_facecolor("0.75")
-    ax.imshow(
-        np.ma.masked_invalid(score.T),
-        origin="lower",
-        extent=extent,
-        cmap="gray",
-        vmin=0.0,
-        vmax=1.0,
-        interpolation="nearest",
-    )
-    invalid = np.where(np.isfinite(score) & ~valid, 1.0, np.nan)
-    ax.imshow(
-        invalid.T, origin="lower", extent=extent, cmap="autumn", alpha=0.35, interpolation="nearest"
-    )
+    _grid(ax, score, extent, cmap="gray", vmin=0.0, vmax=1.0)
+    _invalid_overlay(ax, score, valid, extent, 0.35)
     if touchdowns:
         nominal = np.array([t.nominal[:2] for t in touchdowns])
         chosen = np.array([t.chosen[:2] for t in touchdowns])
