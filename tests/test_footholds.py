@@ -24,30 +24,37 @@ def _score_map(valid: np.ndarray, score: np.ndarray) -> ScoreMap:
     return ScoreMap(nan, nan, score, valid, (0.0, 0.0), RES)
 
 
-@given(st.integers(0, 2**32 - 1), st.floats(0.0, 1.0), st.integers(0, 2))
+@given(st.integers(0, 2**32 - 1), st.floats(0.0, 1.0), st.integers(0, 2), st.integers(0, 2))
 @settings(max_examples=150, deadline=None)
-def test_search_returns_the_nearest_acceptable_cell(seed, density, margin):
-    """Cross-check against brute force: the nearest valid (eroded) cell within the radius,
-    ties by score; never an invalid or unknown cell; None when there is none."""
+def test_search_returns_the_nearest_acceptable_cell(seed, density, margin, fallback):
+    """Cross-check against brute force: the nearest valid cell with the full edge margin
+    within the radius, ties by score, else the nearest with the next narrower margin; never
+    an invalid or unknown cell; None when there is none."""
     rng = np.random.default_rng(seed)
     valid = rng.uniform(size=(30, 30)) < density
     score = rng.uniform(0, 0.5, (30, 30))
     heights = rng.uniform(-0.05, 0.05, (30, 30))
     heights[~valid & (rng.uniform(size=valid.shape) < 0.5)] = np.nan  # some unknown cells
-    config = FootholdConfig(search_radius=0.1, edge_margin_cells=margin)
+    least = max(margin - fallback, 0)
+    config = FootholdConfig(
+        search_radius=0.1, edge_margin_cells=margin, min_edge_margin_cells=least
+    )
     search = FootholdSearch(config, RES)
     nominal = rng.uniform(0.1, 0.5, 2)
     found = search.search(nominal, _score_map(valid, score), heights)
-    usable = _eroded(valid, margin)
     centre = np.floor(nominal / RES).astype(int)
     best = None
-    for i in range(30):
-        for j in range(30):
-            d = np.hypot(i - centre[0], j - centre[1])
-            if usable[i, j] and d * RES <= 0.1 + 1e-9:
-                key = (round(d, 9), score[i, j])
-                if best is None or key < best[0]:
-                    best = (key, (i, j))
+    for m in range(margin, least - 1, -1):
+        usable = _eroded(valid, m)
+        for i in range(30):
+            for j in range(30):
+                d = np.hypot(i - centre[0], j - centre[1])
+                if usable[i, j] and d * RES <= 0.1 + 1e-9:
+                    key = (round(d, 9), score[i, j])
+                    if best is None or key < best[0]:
+                        best = (key, (i, j))
+        if best is not None:
+            break
     if best is None:
         assert found is None
     else:
@@ -69,7 +76,9 @@ def test_valid_nominal_cell_keeps_the_nominal_position():
 def test_accept_callback_filters_candidates():
     """Constraints (reach, stability) reject candidates; the next nearest is taken."""
     valid = np.ones((20, 20), dtype=bool)
-    search = FootholdSearch(FootholdConfig(search_radius=0.1, edge_margin_cells=0), RES)
+    search = FootholdSearch(
+        FootholdConfig(search_radius=0.1, edge_margin_cells=0, min_edge_margin_cells=0), RES
+    )
     found = search.search(
         [0.2, 0.2],
         _score_map(valid, np.zeros((20, 20))),

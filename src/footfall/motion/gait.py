@@ -167,7 +167,7 @@ class GaitConfig:
     retarget_tolerance: float = 0.002
     acceleration_limit: float = 0.5
     yaw_acceleration_limit: float = 2.0
-    height_rate_limit: float = 0.05
+    height_rate_limit: float = 0.07
     swing: str = "flow"
     flow: FlowConfig = field(default_factory=FlowConfig)
     polynomial_apex: float = 0.1

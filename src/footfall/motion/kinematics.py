@@ -149,29 +149,40 @@ class LegKinematics:
             self.check_limits(angles)
         return angles
 
-    def reachable(self, leg: int, foot_in_body: npt.ArrayLike, margin: float = 0.0) -> bool:
-        """Whether one leg reaches a foot position, shape (3,) [m], within its joint limits.
+    def reachable(
+        self, leg: int, foot_in_body: npt.ArrayLike, margin: float = 0.0
+    ) -> bool | npt.NDArray[np.bool_]:
+        """Whether one leg reaches foot positions within its joint limits.
 
         Args:
             leg: Leg index.
-            foot_in_body: Foot target in the body frame [m].
+            foot_in_body: Foot target in the body frame, shape (3,), or several, shape
+                (..., 3) [m].
             margin: Keep this far inside the workspace boundary [m] (reach) and
                 ``margin / L3`` radians inside the joint limits.
+
+        Returns:
+            A bool for one target, else a bool array of shape (...).
         """
         p = np.asarray(foot_in_body, dtype=np.float64) - self.mounts_in_body[leg]
         c, s = self._cos_yaw[leg], self._sin_yaw[leg]
-        x, y, z = c * p[0] + s * p[1], -s * p[0] + c * p[1], p[2]
+        x = c * p[..., 0] + s * p[..., 1]
+        y = -s * p[..., 0] + c * p[..., 1]
+        z = p[..., 2]
         r = np.hypot(x, y) - self.L1
         reach = np.hypot(r, z)
-        if not (abs(self.L2 - self.L3) + margin <= reach <= self.L2 + self.L3 - margin):
-            return False
+        in_reach = (abs(self.L2 - self.L3) + margin <= reach) & (
+            reach <= self.L2 + self.L3 - margin
+        )
         cos_knee = (reach * reach - self.L2**2 - self.L3**2) / (2.0 * self.L2 * self.L3)
         t3 = -np.arccos(np.clip(cos_knee, -1.0, 1.0))
         t2 = np.arctan2(z, r) - np.arctan2(self.L3 * np.sin(t3), self.L2 + self.L3 * np.cos(t3))
         t2 = np.mod(t2 + np.pi, 2.0 * np.pi) - np.pi
-        angles = np.array([np.arctan2(y, x), t2, t3])
+        angles = np.stack([np.arctan2(y, x), t2, t3], axis=-1)
         slack = margin / self.L3
-        return bool(np.all((angles >= self.lower + slack) & (angles <= self.upper - slack)))
+        within = np.all((angles >= self.lower + slack) & (angles <= self.upper - slack), axis=-1)
+        ok = in_reach & within
+        return bool(ok) if ok.ndim == 0 else ok
 
     def check_limits(self, angles: npt.ArrayLike) -> None:
         """Raise :class:`UnreachableTargetError` if any angle, shape (6, 3), is out of range."""

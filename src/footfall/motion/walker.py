@@ -41,6 +41,7 @@ from footfall.motion.gait import (
 from footfall.motion.kinematics import LegKinematics
 from footfall.motion.planar import PlanarPose
 from footfall.motion.swing import FlowSwing, PolynomialArcSwing, SwingTrajectory
+from footfall.planning.terrain_planner import StepPoses
 from footfall.robot.spec import HexapodSpec
 
 if TYPE_CHECKING:
@@ -49,6 +50,14 @@ if TYPE_CHECKING:
 
 # A robot frozen for want of a foothold retries after this many new map frames.
 _MAP_FRAMES_BEFORE_RETRY = 5
+# Fractions of the commanded speed a step is planned at, fastest first: where footholds
+# are scarce the body slows down so the legs can find them.
+_STEP_SPEED_SCALES = (1.0, 0.5, 0.25)
+# Fraction of a swing after which re-plans keep the target where they can.
+_LATE_SWING = 0.5
+# Farthest the planned body height looks from the present one [m], and its spacing [m].
+_BODY_Z_WINDOW = 0.08
+_BODY_Z_STEP = 0.005
 # Time step of the finite difference that gives the swing foot's velocity [s].
 _VELOCITY_PROBE_DT = 1e-3
 
@@ -114,6 +123,7 @@ class _StepPlan:
     targets: npt.NDArray[np.float64] = field(default_factory=lambda: np.zeros((6, 3)))
     version: int = -1
     pending_freeze: str = ""
+    body_z: npt.NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
 
 
 def _materially_different(a: WalkCommand, b: WalkCommand) -> bool:
@@ -190,6 +200,7 @@ class WalkController:
         self._start_of_walk = True
         self._step_start_pose = self.pose
         self._stalled_steps = 0
+        self._step_speed_scale = 1.0  # the fraction of the command this step plans for
         self._last_command: WalkCommand | None = None
         self._frozen_version = -1
         self._last_targets = self._solve(np.zeros((6, 3)), 0.0, 0.0)
@@ -387,7 +398,7 @@ class WalkController:
                 )
             else:
                 scale = min(scale, self._reach_scale(int(leg), feet[leg], u))
-        return max(scale, 0.0)
+        return max(min(scale, self._step_speed_scale), 0.0)
 
     def _stroke_scale(self, offset: npt.NDArray[np.float64], u: npt.NDArray[np.float64]) -> float:
         """Largest k in [0, 1] with |offset + k u| within the nominal stroke (plus margin)."""
@@ -531,8 +542,12 @@ class WalkController:
         )
         self.step_start = t
         self._step_start_pose = self.pose
-        nominal = self._nominal_targets(n)
-        targets = self._plan_footholds(nominal, swing)
+        for speed_scale in _STEP_SPEED_SCALES if self.planner is not None else (1.0,):
+            self._step_speed_scale = speed_scale
+            nominal = self._nominal_targets(n)
+            targets = self._plan_footholds(nominal, swing)
+            if not isinstance(targets, str):
+                break
         if isinstance(targets, str):
             # No step started: every foot is still down. The same group tries again later.
             self._group_index, self._start_of_walk = group_before, start_before
@@ -597,9 +612,16 @@ class WalkController:
         return support
 
     def _plan_footholds(
-        self, nominal: npt.NDArray[np.float64], swing: npt.NDArray[np.bool_]
+        self,
+        nominal: npt.NDArray[np.float64],
+        swing: npt.NDArray[np.bool_],
+        search_from: npt.NDArray[np.float64] | None = None,
     ) -> npt.NDArray[np.float64] | str:
-        """Targets for the swinging legs: nominal when blind, else the planner's choice."""
+        """Targets for the swinging legs: nominal when blind, else the planner's choice.
+
+        The planner searches from ``search_from`` when given (the present targets, late in
+        a swing), else from the nominal targets.
+        """
         self._plan.nominal = nominal.copy()
         if self.planner is None:
             self._plan.targets = nominal.copy()
@@ -608,48 +630,57 @@ class WalkController:
         remaining = max(self.step_start + self.step_duration - (self._time or 0.0), 0.0)
         # Check footholds against the commanded motion (not the governed one, which may be
         # zero while the body waits): the body will travel that far if the legs allow.
-        vx, vy = self._velocity
-        yaw_rate = self._yaw_rate
+        vx, vy = (
+            self._velocity[0] * self._step_speed_scale,
+            self._velocity[1] * self._step_speed_scale,
+        )
+        yaw_rate = self._yaw_rate * self._step_speed_scale
 
         def pose_after(seconds: float) -> PlanarPose:
             return self.pose.moved((vx, vy), yaw_rate, seconds)
 
-        reach_poses = (pose_after(remaining), pose_after(remaining + (n - 1) * self.step_duration))
-        stable_poses = (pose_after(remaining), pose_after(remaining + self.step_duration))
+        poses = StepPoses(
+            now=self.pose,
+            touchdown=pose_after(remaining),
+            liftoff=pose_after(remaining + (n - 1) * self.step_duration),
+            stable=(pose_after(remaining), pose_after(remaining + self.step_duration)),
+        )
+        # Body heights within reach by touchdown at the height rate limit; the legs see
+        # them raised by the height feedback's correction.
+        window = float(
+            np.clip(self.config.height_rate_limit * remaining, 2 * _BODY_Z_STEP, _BODY_Z_WINDOW)
+        )
+        body_z = self.height + np.append(np.arange(-window, window - 1e-9, _BODY_Z_STEP), window)
         plan = self.planner.plan(
-            nominal,
+            nominal if search_from is None else search_from,
             swing,
             self._support_after(swing),
             self.feet_commanded_in_world,
-            reach_poses,
-            stable_poses,
-            self.floor + self._body_height_command,
+            poses,
+            body_z + self.height_correction,
         )
         self._plan.version = self.planner.version
         if isinstance(plan, str):
             return plan
         self._plan.targets = plan.targets.copy()
+        self._plan.body_z = plan.body_z - self.height_correction
         return plan.targets
 
     def _update_floor(self, targets: npt.NDArray[np.float64]) -> None:
-        """Thesis §6.4: the floor under the body follows the footholds (blind: z = 0)."""
+        """Thesis §6.4: the floor under the body follows the footholds (blind: z = 0).
+
+        The body height the floor asks for is kept where every leg reaches its foot: of the
+        heights the plan allows, the nearest.
+        """
         if self.planner is None:
             return
         feet = np.where(self.swinging[:, None], targets, self.feet_in_world)
-        wanted = self.planner.floor_height(
+        wanted = self._body_height_command + self.planner.floor_height(
             feet[:, 2] - self.spec.foot_radius, self.pose, self._body_height_command
         )
-        # Keep every foot (stance, and swing targets) within reach: of the floors near the
-        # wanted one, take the closest at which all legs reach their feet.
-        in_body = self.pose.points_to_body(feet)
-        for delta in sorted(np.arange(-0.08, 0.0801, 0.005), key=abs):
-            body_z = wanted + delta + self._body_height_command
-            p = in_body.copy()
-            p[:, 2] -= body_z
-            if all(self.kinematics.reachable(leg, p[leg], 0.005) for leg in range(6)):
-                self.floor = float(wanted + delta)
-                return
-        self.floor = float(wanted)
+        allowed = self._plan.body_z
+        body_z = float(allowed[np.argmin(np.abs(allowed - wanted))]) if allowed.size else wanted
+        self.floor = body_z - self._body_height_command
 
     def _nominal_targets(self, n: int) -> npt.NDArray[np.float64]:
         """Touchdown targets in the world, shape (6, 3) [m].
@@ -670,7 +701,7 @@ class WalkController:
         velocity = np.zeros((6, 3))
         if not self.swings:
             return velocity
-        targets = self._current_targets()
+        targets = self._current_targets(t)
         local_t = t - self.step_start
         for leg, swing in self.swings.items():
             if np.linalg.norm(targets[leg] - swing.target) > self.config.retarget_tolerance:
@@ -680,10 +711,13 @@ class WalkController:
             velocity[leg] = (ahead - self.feet_in_world[leg]) / _VELOCITY_PROBE_DT
         return velocity
 
-    def _current_targets(self) -> npt.NDArray[np.float64]:
+    def _current_targets(self, t: float) -> npt.NDArray[np.float64]:
         """Swing targets now: re-planned when the nominal ones moved or the map changed.
 
-        When a re-plan finds no acceptable foothold mid-swing, the foot goes back to where it
+        Late in a swing only a new map re-plans, and the search starts from the present
+        target rather than the nominal one: a target still acceptable stays, one that is not
+        moves to the nearest acceptable cell, so a foot about to land never lurches across a
+        step. When a re-plan finds no acceptable foothold, the foot goes back to where it
         lifted off (a known, safe cell) and the robot freezes at the end of the step.
         """
         nominal = self._nominal_targets(len(self.config.groups))
@@ -695,14 +729,20 @@ class WalkController:
             nominal[self.swinging, :2] - self._plan.nominal[self.swinging, :2], axis=1
         )
         stale = self.planner.version != self._plan.version
-        if not self._plan.pending_freeze and (stale or (moved.size and moved.max() > 0.02)):
-            replanned = self._plan_footholds(nominal, self.swinging)
-            if isinstance(replanned, str):
-                self._plan.pending_freeze = replanned
-                for leg, swing in self.swings.items():
-                    self._plan.targets[leg] = swing.start
-            else:
-                self._update_floor(replanned)
+        late = t - self.step_start > _LATE_SWING * self.step_duration
+        if self._plan.pending_freeze or not (
+            stale or (not late and moved.size and moved.max() > 0.02)
+        ):
+            return self._plan.targets
+        replanned = self._plan_footholds(
+            nominal, self.swinging, self._plan.targets.copy() if late else None
+        )
+        if isinstance(replanned, str):
+            self._plan.pending_freeze = replanned
+            for leg, swing in self.swings.items():
+                self._plan.targets[leg] = swing.start
+        else:
+            self._update_floor(replanned)
         return self._plan.targets
 
     # Kinematics ---------------------------------------------------------------------------

@@ -31,18 +31,29 @@ class FootholdConfig:
         search_radius: Farthest a foothold may move from its nominal position [m].
         stability_margin: Least distance from the centre of mass to the edge of the support
             polygon [m].
-        edge_margin_cells: A candidate must also have every cell within this many cells
+        edge_margin_cells: A candidate should also have every cell within this many cells
             valid: room for the foot's radius, tracking error and a map edge that is a cell
             off (a riser seen face-on lends its height to the cell before it).
+        min_edge_margin_cells: Where no candidate within the radius has the full margin
+            (stones smaller than the margin leaves room on), the margin shrinks one cell at
+            a time down to this.
     """
 
     search_radius: float = 0.16
     stability_margin: float = 0.02
     edge_margin_cells: int = 2
+    min_edge_margin_cells: int = 0
 
     def __post_init__(self) -> None:
-        if not self.search_radius >= 0 or self.stability_margin < 0 or self.edge_margin_cells < 0:
-            raise ConfigError("search_radius, stability_margin and edge_margin_cells must be >= 0")
+        if not self.search_radius >= 0 or self.stability_margin < 0:
+            raise ConfigError("search_radius and stability_margin must be >= 0")
+        if not 0 <= self.min_edge_margin_cells <= self.edge_margin_cells:
+            raise ConfigError("edge margins need 0 <= min_edge_margin_cells <= edge_margin_cells")
+
+    @property
+    def edge_margins(self) -> tuple[int, ...]:
+        """Edge margins tried in turn [cells], widest first."""
+        return tuple(range(self.edge_margin_cells, self.min_edge_margin_cells - 1, -1))
 
 
 def sorted_offsets(radius_cells: float) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
@@ -147,6 +158,8 @@ class FootholdSearch:
         self.config = config
         self.resolution = resolution
         self.offsets, self.distances = sorted_offsets(config.search_radius / resolution)
+        self._cache_key: ScoreMap | None = None
+        self._cache: dict[int, npt.NDArray[np.bool_]] = {}
 
     def search(
         self,
@@ -156,6 +169,9 @@ class FootholdSearch:
         accept: Callable[[npt.NDArray[np.float64]], bool] | None = None,
     ) -> Foothold | None:
         """The nearest acceptable cell to a nominal foot position.
+
+        Cells with the full edge margin are searched first; the narrower margins only when
+        none of those passes.
 
         Args:
             nominal_xy: Nominal foot position in the world, shape (2,) [m].
@@ -174,24 +190,34 @@ class FootholdSearch:
         n_i, n_j = scores.valid.shape
         inside = (cells[:, 0] >= 0) & (cells[:, 0] < n_i) & (cells[:, 1] >= 0) & (cells[:, 1] < n_j)
         cells, distances = cells[inside], self.distances[inside]
-        ok = _eroded(scores.valid, self.config.edge_margin_cells)[cells[:, 0], cells[:, 1]]
-        cells, distances = cells[ok], distances[ok]
-        if len(cells) == 0:
-            return None
-        cell_scores = scores.score[cells[:, 0], cells[:, 1]]
-        order = np.lexsort((cell_scores, np.round(distances, 9)))  # distance, then score
-        for k in order:
-            i, j = (int(v) for v in cells[k])
-            # The nominal cell keeps the nominal position (no adjustment); others their centre.
-            on_nominal = i == centre[0] and j == centre[1]
-            xy = (
-                nominal
-                if on_nominal
-                else np.asarray(scores.origin) + (np.array([i, j]) + 0.5) * res
-            )
-            point = np.array([xy[0], xy[1], heights[i, j]])
-            if accept is None or accept(point):
-                return Foothold(
-                    point, (i, j), float(np.hypot(*(xy - nominal))), float(cell_scores[k])
+        tried = np.zeros(len(cells), dtype=bool)
+        for margin in self.config.edge_margins:
+            ok = self._eroded(scores, margin)[cells[:, 0], cells[:, 1]] & ~tried
+            tried |= ok
+            candidates, candidate_distances = cells[ok], distances[ok]
+            cell_scores = scores.score[candidates[:, 0], candidates[:, 1]]
+            order = np.lexsort((cell_scores, np.round(candidate_distances, 9)))  # distance, score
+            for k in order:
+                i, j = (int(v) for v in candidates[k])
+                # The nominal cell keeps the nominal position (no adjustment); others their
+                # centre.
+                on_nominal = i == centre[0] and j == centre[1]
+                xy = (
+                    nominal
+                    if on_nominal
+                    else np.asarray(scores.origin) + (np.array([i, j]) + 0.5) * res
                 )
+                point = np.array([xy[0], xy[1], heights[i, j]])
+                if accept is None or accept(point):
+                    return Foothold(
+                        point, (i, j), float(np.hypot(*(xy - nominal))), float(cell_scores[k])
+                    )
         return None
+
+    def _eroded(self, scores: ScoreMap, margin: int) -> npt.NDArray[np.bool_]:
+        """Valid cells with ``margin`` valid cells around them, cached per score map."""
+        if self._cache_key is not scores:
+            self._cache_key, self._cache = scores, {}
+        if margin not in self._cache:
+            self._cache[margin] = _eroded(scores.valid, margin)
+        return self._cache[margin]

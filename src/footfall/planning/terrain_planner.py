@@ -32,18 +32,41 @@ class TerrainPlannerConfig:
         reach_margin: Footholds keep this far inside each leg's workspace [m].
         swing_clearance: Least gap between a swinging foot's underside and the mapped
             terrain along its path [m].
-        body_clearance: Least gap between the body's underside and the mapped terrain
-            under it [m].
+        body_clearance: Gap the body keeps between its underside and the mapped terrain
+            under it when the legs allow [m].
+        min_body_clearance: Least gap, never given up: a foothold that needs a lower body
+            is refused [m].
     """
 
     footholds: FootholdConfig = field(default_factory=FootholdConfig)
     reach_margin: float = 0.02
     swing_clearance: float = 0.03
     body_clearance: float = 0.03
+    min_body_clearance: float = 0.01
 
     def __post_init__(self) -> None:
-        if min(self.reach_margin, self.swing_clearance, self.body_clearance) < 0:
+        if min(self.reach_margin, self.swing_clearance, self.min_body_clearance) < 0:
             raise ConfigError("planner margins must be >= 0")
+        if self.body_clearance < self.min_body_clearance:
+            raise ConfigError("body_clearance must be at least min_body_clearance")
+
+
+@dataclass(frozen=True)
+class StepPoses:
+    """Planned body poses that one step's footholds are checked at.
+
+    Attributes:
+        now: The body now.
+        touchdown: The body when the swinging legs touch down.
+        liftoff: The body when the swinging legs lift off again.
+        stable: Poses at which the body centre must lie inside the support polygon of the
+            legs that support after touchdown.
+    """
+
+    now: PlanarPose
+    touchdown: PlanarPose
+    liftoff: PlanarPose
+    stable: tuple[PlanarPose, ...]
 
 
 @dataclass(frozen=True)
@@ -55,11 +78,15 @@ class FootholdPlan:
             not swing are their current positions.
         nominal: The nominal targets the search started from, shape (6, 3) [m].
         adjusted: Which swinging legs were moved off their nominal cell, shape (6,).
+        body_z: The body heights in the world, ascending, at which every leg reaches its
+            foot: supporting feet now and at touchdown, the chosen footholds at touchdown
+            and lift-off [m].
     """
 
     targets: npt.NDArray[np.float64]
     nominal: npt.NDArray[np.float64]
     adjusted: npt.NDArray[np.bool_]
+    body_z: npt.NDArray[np.float64]
 
 
 class TerrainPlanner:
@@ -114,22 +141,24 @@ class TerrainPlanner:
         swinging: npt.NDArray[np.bool_],
         support_after: npt.NDArray[np.bool_],
         feet: npt.NDArray[np.float64],
-        poses: tuple[PlanarPose, ...],
-        stability_poses: tuple[PlanarPose, ...],
-        body_z: float,
+        poses: StepPoses,
+        body_z: npt.ArrayLike,
     ) -> FootholdPlan | str:
         """Move each swinging leg's nominal foothold to the nearest acceptable cell.
+
+        The body height is planned with the footholds: a foothold is reachable when the leg
+        reaches it at one of the candidate body heights at which every other foot is also
+        reached. A step down or up that the commanded height would put out of reach is
+        taken by lowering or raising the body instead.
 
         Args:
             nominal: Nominal foot-centre targets in the world, shape (6, 3) [m] (z ignored).
             swinging: Legs to plan, shape (6,).
             support_after: Legs supporting the body after touchdown, shape (6,).
             feet: Current foot-centre positions, shape (6, 3) [m].
-            poses: Planned body poses each foothold must be reachable from (touchdown to
-                lift-off).
-            stability_poses: Planned body poses at which the body centre must lie inside the
-                support polygon of ``support_after`` (while those legs support).
-            body_z: Planned body height in the world [m].
+            poses: Body poses the footholds are checked at.
+            body_z: Candidate body heights in the world [m]: those the body can reach by
+                touchdown.
 
         Returns:
             The plan, or the reason there is none (naming the leg).
@@ -138,25 +167,45 @@ class TerrainPlanner:
             return "no map yet: the camera has not seen the ground ahead"
         c = self.config
         r = self.spec.foot_radius
+        heights = np.sort(np.atleast_1d(np.asarray(body_z, dtype=np.float64)))
+        feasible = self._stance_heights(feet, ~swinging, poses, heights)
+        if not feasible.any():
+            return "the supporting feet are out of reach at every body height the body can take"
+        lowest = self.lowest_body_z((poses.now, poses.touchdown), c.min_body_clearance)
+        feasible &= heights >= lowest
+        if not feasible.any():
+            return (
+                f"the body cannot keep {c.min_body_clearance:.2f} m above the terrain under it "
+                f"(it would have to be at {lowest:.3f} m) with every foot in reach"
+            )
         targets = feet.copy()
         targets[swinging] = nominal[swinging]
         adjusted = np.zeros(6, dtype=bool)
         for leg in np.flatnonzero(swinging):
+            chosen_heights = feasible
 
-            def accept(point: npt.NDArray[np.float64], leg: int = int(leg)) -> bool:
+            def accept(
+                point: npt.NDArray[np.float64],
+                leg: int = int(leg),
+                feasible: npt.NDArray[np.bool_] = feasible,
+            ) -> bool:
+                nonlocal chosen_heights
                 centre = np.array([point[0], point[1], point[2] + r])
-                for pose in poses:
-                    in_body = pose.points_to_body(centre[None])[0]
-                    in_body[2] -= body_z
-                    if not self.kinematics.reachable(leg, in_body, c.reach_margin):
-                        return False
+                ok = feasible & self._reach_heights(
+                    leg, centre, (poses.touchdown, poses.liftoff), heights, c.reach_margin
+                )
+                if not ok.any():
+                    return False
                 support = targets[support_after].copy()
                 support[np.flatnonzero(support_after) == leg] = centre
-                return all(
+                if not all(
                     point_in_polygon_margin((pose.x, pose.y), support[:, :2])
                     >= c.footholds.stability_margin
-                    for pose in stability_poses
-                )
+                    for pose in poses.stable
+                ):
+                    return False
+                chosen_heights = ok
+                return True
 
             foothold = self._search.search(
                 nominal[leg, :2], self.scores, self.snapshot.heights, accept
@@ -168,9 +217,49 @@ class TerrainPlanner:
                     f"{c.footholds.search_radius:.2f} m of its nominal foothold "
                     f"({nominal[leg, 0]:.2f}, {nominal[leg, 1]:.2f}) m"
                 )
+            feasible = chosen_heights
             targets[leg] = foothold.position + [0.0, 0.0, r]
             adjusted[leg] = foothold.moved > 1e-9
-        return FootholdPlan(targets, nominal.copy(), adjusted)
+        return FootholdPlan(targets, nominal.copy(), adjusted, heights[feasible])
+
+    def _reach_heights(
+        self,
+        leg: int,
+        foot: npt.NDArray[np.float64],
+        poses: tuple[PlanarPose, ...],
+        heights: npt.NDArray[np.float64],
+        margin: float,
+    ) -> npt.NDArray[np.bool_]:
+        """At which body heights the leg reaches a world point from every pose, shape (k,)."""
+        ok = np.ones(len(heights), dtype=bool)
+        for pose in poses:
+            in_body = np.repeat(pose.points_to_body(foot[None]), len(heights), axis=0)
+            in_body[:, 2] -= heights
+            ok &= self.kinematics.reachable(leg, in_body, margin)
+        return ok
+
+    def _stance_heights(
+        self,
+        feet: npt.NDArray[np.float64],
+        stance: npt.NDArray[np.bool_],
+        poses: StepPoses,
+        heights: npt.NDArray[np.float64],
+    ) -> npt.NDArray[np.bool_]:
+        """Body heights at which every supporting foot stays reached until touchdown.
+
+        Only the pose now is binding when no height serves both (the stroke governor then
+        slows the body down so the feet stay reached), and then without a margin.
+        """
+        legs = np.flatnonzero(stance)
+        margin = 0.5 * self.config.reach_margin  # as the stroke governor's
+        ok = np.zeros(len(heights), dtype=bool)
+        for pose_set, m in (((poses.now, poses.touchdown), margin), ((poses.now,), 0.0)):
+            ok = np.ones(len(heights), dtype=bool)
+            for leg in legs:
+                ok &= self._reach_heights(int(leg), feet[leg], pose_set, heights, m)
+            if ok.any():
+                break
+        return ok
 
     # Floor height -------------------------------------------------------------------------
     def floor_height(
@@ -188,15 +277,18 @@ class TerrainPlanner:
             body_height: Commanded body height above the floor [m].
         """
         top3 = np.sort(np.asarray(ground_heights, dtype=np.float64))[-3:]
-        floor = float(top3.mean())
-        if self.snapshot is None:
-            return floor
+        lowest = self.lowest_body_z((pose,), self.config.body_clearance)
+        return max(float(top3.mean()), lowest - body_height)
+
+    def lowest_body_z(self, poses: tuple[PlanarPose, ...], clearance: float) -> float:
+        """Lowest body height keeping ``clearance`` under the body at every pose [m].
+
+        -inf where the map knows nothing under the body.
+        """
         length, width, thickness = self.spec.body_size
         u, v = np.meshgrid(np.linspace(-0.5, 0.5, 9) * length, np.linspace(-0.5, 0.5, 5) * width)
-        under = self.ground_height(pose.points_to_world(np.stack([u.ravel(), v.ravel()], axis=1)))
-        if np.isfinite(under).any():
-            needed = (
-                float(np.nanmax(under)) + self.config.body_clearance + 0.5 * thickness - body_height
-            )
-            floor = max(floor, needed)
-        return floor
+        footprint = np.stack([u.ravel(), v.ravel()], axis=1)
+        under = np.concatenate([self.ground_height(p.points_to_world(footprint)) for p in poses])
+        if not np.isfinite(under).any():
+            return -np.inf
+        return float(np.nanmax(under)) + clearance + 0.5 * thickness

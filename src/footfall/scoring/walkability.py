@@ -11,7 +11,7 @@ A cell is valid when it is known, every cell its kernel reaches is known (and in
 the map), ``S_g + S_p`` is below the threshold and, for a mapped cell, the points that
 fell in it within one frame never spanned more than ``max_cell_spread`` in height (a cell
 straddling an edge, or a groove narrower than the grid, hides in its maximum but not in
-its spread). Defaults reproduce thesis
+its spread), nor did those of its eight neighbours. Defaults reproduce thesis
 Figs. 6.6-6.8 on the course terrain: box tops, the ramp and the floor valid; box edges,
 the hole rim, the pillar's and the pedestal's sides invalid. The window (5 cells, 10 cm,
 sigma 2 cm) suits the default robot's 2.4 cm feet: the middle of a 9 cm cobblestone is
@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from scipy import ndimage
 
 from footfall.errors import ConfigError
 from footfall.mapping.height_map import MapSnapshot
@@ -125,9 +126,15 @@ def score_heights(
 
 
 def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> ScoreMap:
-    """Score a height-map snapshot; cells with a large height spread are invalid too."""
+    """Score a height-map snapshot.
+
+    A cell with a large height spread straddles an edge, and is invalid; so are its eight
+    neighbours, whose proximity scores cannot be trusted: the edge may lie anywhere in the
+    straddling cell, whose height shows one side of it only.
+    """
     c = config or ScoreConfig()
     slope, proximity, score, valid = score_heights(snapshot.heights, snapshot.resolution, c)
     if snapshot.spread is not None:
-        valid &= ~(np.nan_to_num(snapshot.spread, nan=0.0) > c.max_cell_spread)
+        edge = np.nan_to_num(snapshot.spread, nan=0.0) > c.max_cell_spread
+        valid &= ~ndimage.binary_dilation(edge, structure=np.ones((3, 3), dtype=bool))
     return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)
