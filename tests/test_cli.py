@@ -78,6 +78,17 @@ def test_too_fast_is_a_clear_error(tmp_path, capsys):
     assert "top speed" in capsys.readouterr().out
 
 
+def test_walk_on_a_chosen_staircase(tmp_path, capsys):
+    """--rise sets the stairs' step height (the terrain swept by `footfall bench terrain`);
+    it is refused for another terrain."""
+    out = tmp_path / "stairs"
+    args = ["walk", "--terrain", "stairs", "--rise", "0.07", "--seconds", "1", "--out", str(out)]
+    assert main(args) == 0
+    assert json.loads((out / "metrics.json").read_text())["terrain_params"] == {"rise": 0.07}
+    assert main(["walk", "--terrain", "flat", "--rise", "0.07", "--out", str(out)]) == 2
+    assert "--rise applies to --terrain stairs only" in capsys.readouterr().out
+
+
 def test_unknown_robot_is_a_clear_error(tmp_path, capsys):
     """An unknown robot name lists the built-in robots."""
     assert main(["walk", "--robot", "spider", "--out", str(tmp_path)]) == 2
@@ -98,6 +109,8 @@ def test_help_explains_every_walk_option():
         "--seed",
         "--out",
         "--blind",
+        "--rise",
+        "--groove",
     ):
         assert option in help_text
     assert all(action.help for action in walk._actions)
@@ -173,3 +186,26 @@ def test_map_bad_tum_folder_is_a_clear_error(tmp_path, capsys):
     """Mapping a folder that holds no sequence names the problem."""
     assert main(["map", "--tum", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
     assert "depth" in capsys.readouterr().out
+
+
+def test_bench_terrain_writes_its_table_and_chart(tmp_path, monkeypatch):
+    """`footfall bench terrain` writes bench.json (per configuration and overall rates) and
+    bench.png; walks run in parallel processes with --jobs give the same outcomes."""
+    import footfall.benchmarking
+
+    monkeypatch.setattr(footfall.benchmarking, "TERRAIN_SWEEP", (("stairs", "rise", (0.04,)),))
+    outs = []
+    for jobs in ("1", "2"):
+        out = tmp_path / f"jobs{jobs}"
+        args = ["bench", "terrain", "--seeds", "1", "--seconds", "1", "--jobs", jobs]
+        assert main([*args, "--out", str(out)]) == 0
+        assert (out / "bench.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        outs.append(json.loads((out / "bench.json").read_text()))
+    serial, parallel = outs
+    assert [r["mode"] for r in serial["results"]] == ["planned", "blind"]
+    assert all(r["runs"] == 1 for r in serial["results"])
+    assert {"planned_success_rate", "blind_success_rate"} <= serial.keys()
+    for a, b in zip(serial["results"], parallel["results"], strict=True):
+        assert {k: v for k, v in a.items() if k != "wall_seconds"} == {
+            k: v for k, v in b.items() if k != "wall_seconds"
+        }

@@ -64,6 +64,11 @@ def test_stairs_go_up_then_down():
     assert set(np.round(np.unique(profile), 6)) == {0.0, 0.05, 0.1, 0.15}
     assert profile[0] == 0 and profile[-1] == 0
     assert stairs.goal[0] > stairs.end_x
+    # Each tread and the top landing are as long as asked.
+    top = xs[np.isclose(profile, 0.15)]
+    assert top[-1] - top[0] == pytest.approx(0.4, abs=0.011)
+    first = xs[np.isclose(profile, 0.05) & (xs < top[0])]
+    assert first[-1] - first[0] == pytest.approx(0.2, abs=0.011)
 
 
 def test_cobblestones_are_seeded():
@@ -80,3 +85,25 @@ def test_unknown_terrain_names_the_choices():
     """An unknown terrain lists the known ones."""
     with pytest.raises(ConfigError, match="flat, stairs, cobblestones, course"):
         make_terrain("lava")
+
+
+def test_true_scores_see_what_a_perfect_camera_would():
+    """The ground truth takes each cell's highest point and flags cells whose points span
+    an edge: a 1 cm groove between stones is invalid in both cells it touches, however
+    the grid falls; a stone's middle is valid; stones whose edges lie on cell centres give
+    symmetric valid cores."""
+    from footfall.scoring.walkability import ScoreConfig
+    from footfall.sim.walk import TrueScores
+
+    narrow = Cobblestones(groove=0.01, jitter=0.0, seed=0)
+    truth = TrueScores(narrow, 0.02, ScoreConfig(), (0.0, 3.2, -0.8, 0.8))
+    boundary = narrow.start_x + 5 * narrow.stone  # a groove centred here, along y
+    assert not truth.valid_at((boundary - 0.01, 0.08))
+    assert not truth.valid_at((boundary + 0.01, 0.08))
+    middle = boundary + 0.5 * narrow.stone
+    assert truth.valid_at((middle, -0.64 + 4.5 * narrow.stone))
+    wide = Cobblestones(groove=0.06, jitter=0.0, seed=0)
+    truth = TrueScores(wide, 0.02, ScoreConfig(), (0.0, 3.2, -0.8, 0.8))
+    x0 = wide.start_x + 5 * wide.stone
+    profile = [truth.valid_at((x0 + 0.01 + 0.02 * k, -0.64 + 4.5 * wide.stone)) for k in range(8)]
+    assert profile == profile[::-1] and sum(profile) > 0

@@ -7,8 +7,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from footfall.mapping.height_map import MapSnapshot
 from footfall.scoring.reference import score_grid_numpy
-from footfall.scoring.walkability import ScoreConfig, score_heights
+from footfall.scoring.walkability import (
+    ScoreConfig,
+    edge_cells,
+    score_heights,
+    score_map,
+    step_cells,
+)
 from footfall.sim.terrain import Course
 
 CONFIG = ScoreConfig()
@@ -109,3 +116,53 @@ def test_bad_score_config_is_refused():
         ScoreConfig(kernel_size=6)
     with pytest.raises(ConfigError):
         ScoreConfig(threshold=0.0)
+
+
+def _snapshot(heights: np.ndarray, spread: np.ndarray) -> MapSnapshot:
+    return MapSnapshot(heights, np.isfinite(heights), (0.0, 0.0), 0.02, spread)
+
+
+def test_cells_straddling_an_edge_are_found_but_not_a_ramp():
+    """A cell whose points span a step is an edge cell; a ramp's cells span their slope
+    times the diagonal and are not."""
+    config = ScoreConfig()
+    ramp_slope = 0.3
+    ramp = np.full((20, 20), ramp_slope)
+    spread = np.full((20, 20), ramp_slope * 0.02 * np.sqrt(2.0) * 0.95)
+    assert not edge_cells(spread, ramp, 0.02, config).any()
+    flat = np.zeros((20, 20))
+    step = np.zeros((20, 20))
+    step[10, :] = 0.01  # the cells on a 1 cm groove's far wall
+    edge = edge_cells(step, flat, 0.02, config)
+    assert edge[10].all() and edge.sum() == 20
+
+
+def test_an_edge_cell_and_its_neighbours_are_invalid_and_scored_at_the_top():
+    """A cell straddling a stone's edge whose height shows the groove side: it and its eight
+    neighbours are invalid, and the floor two cells off scores the stone's edge."""
+    heights = np.zeros((30, 30))
+    heights[:, 15:] = 0.04  # a stone from column 15 on
+    heights[:, 15] = 0.0  # the straddling column shows the groove side
+    spread = np.zeros((30, 30))
+    spread[:, 15] = 0.04
+    scores = score_map(_snapshot(heights, spread))
+    assert not scores.valid[5:25, 14:17].any()
+    # Scored on the heights alone, the floor at column 13 (two cells from the stone's true
+    # edge) would look farther from it than it is.
+    _, _, plain, _ = score_heights(heights, 0.02, CONFIG)
+    assert scores.score[15, 13] > plain[15, 13] + 0.1
+    assert scores.valid[15, 5] and scores.valid[15, 25]
+
+
+def test_a_step_between_cells_marks_both_as_edge_cells_but_not_a_ramp():
+    """Stones of different heights beside a groove the camera cannot see into: the step
+    between their cells' heights marks the cells on both sides; a ramp's steady rise does
+    not."""
+    heights = np.zeros((20, 20))
+    heights[:, 10:] = 0.005
+    slope, _, _, _ = score_heights(heights, 0.02, CONFIG)
+    steps = step_cells(heights, slope, 0.02, CONFIG)
+    assert steps[:, 9:11].all() and steps.sum() == 40
+    ramp = 0.3 * 0.02 * np.arange(20)[:, None] * np.ones((1, 20))
+    slope, _, _, _ = score_heights(ramp, 0.02, CONFIG)
+    assert not step_cells(ramp, slope, 0.02, CONFIG)[2:-2, 2:-2].any()

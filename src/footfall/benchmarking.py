@@ -8,9 +8,11 @@ ratios hold on any machine. The depth frame is synthetic and deterministic: a
 
 from __future__ import annotations
 
+import multiprocessing
 import statistics
 import time
 from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor, as_completed
 
 import numpy as np
 import numpy.typing as npt
@@ -124,7 +126,7 @@ def run_mapping_benchmark(repeats: int = 30, seed: int = 0) -> dict[str, float]:
     }
 
 
-# The terrain sweep of `footfall bench terrain`: (terrain, difficulty name, values).
+# The terrain sweep of `footfall bench terrain`: (terrain, swept parameter, values).
 TERRAIN_SWEEP: tuple[tuple[str, str, tuple[float, ...]], ...] = (
     ("stairs", "rise", (0.02, 0.04, 0.06, 0.08)),
     ("cobblestones", "groove", (0.01, 0.03, 0.06)),
@@ -132,20 +134,34 @@ TERRAIN_SWEEP: tuple[tuple[str, str, tuple[float, ...]], ...] = (
 )
 
 
-def _terrain_for(name: str, difficulty: str, value: float, seed: int):
-    """The swept terrain; the seed lays the cobblestones and shifts the stairs' start."""
-    from footfall.sim.terrain import Cobblestones, Course, Stairs
+def _terrain_run(job: tuple[str, str, float, str, int, float]) -> dict[str, object]:
+    """One walk of the sweep: ``(terrain, parameter, value, mode, seed, seconds)``."""
+    from footfall.robot.spec import load_spec
+    from footfall.sim.terrain import make_terrain
+    from footfall.sim.walk import WalkSettings, simulate_walk
 
-    rng = np.random.default_rng(seed)
-    if name == "stairs":
-        return Stairs(rise=value, tread=0.25, start_x=0.6 + float(rng.uniform(-0.1, 0.1)))
-    if name == "cobblestones":
-        return Cobblestones(groove=value, seed=seed)
-    return Course()
+    name, difficulty, value, mode, seed, seconds = job
+    params = {} if difficulty == "none" else {difficulty: value}
+    settings = WalkSettings(
+        terrain=name, seconds=seconds, blind=mode == "blind", seed=seed, stop_at_goal=True
+    )
+    terrain = make_terrain(name, seed, **params)
+    m = simulate_walk(load_spec("default"), settings, terrain=terrain).metrics
+    return {
+        "success": bool(m["reached_goal"]) and not m["fell"] and m["invalid_footholds"] == 0,
+        "fell": bool(m["fell"]),
+        "invalid_footholds": int(m["invalid_footholds"]),
+        "frozen": bool(m["frozen"]),
+        "tilt_max_deg": float(m["tilt_max_deg"]),
+        "wall_seconds": float(m["wall_seconds"]),
+    }
 
 
 def run_terrain_benchmark(
-    seeds: int, seconds: float = 90.0, on_run: Callable[[str], None] | None = None
+    seeds: int,
+    seconds: float = 90.0,
+    on_run: Callable[[str], None] | None = None,
+    jobs: int = 1,
 ) -> dict[str, object]:
     """Planned and blind walking over the terrain sweep, ``seeds`` runs per configuration.
 
@@ -155,68 +171,67 @@ def run_terrain_benchmark(
         seeds: Runs per terrain, difficulty and mode.
         seconds: Longest walk [s].
         on_run: Called with a label after each run (progress display).
+        jobs: Walks simulated at once, each in its own process.
 
     Returns:
         Per configuration: runs, successes, falls, invalid footholds, frozen runs, median
         tilt, wall time; overall ``planned_success_rate`` and ``blind_success_rate``.
     """
-    from footfall.robot.spec import load_spec
-    from footfall.sim.walk import WalkSettings, simulate_walk
+    configs = [
+        (name, difficulty, value, mode)
+        for name, difficulty, values in TERRAIN_SWEEP
+        for value in values
+        for mode in ("planned", "blind")
+    ]
+    work = [(*config, seed, seconds) for config in configs for seed in range(seeds)]
+    runs: dict[tuple, dict[str, object]] = {}
 
-    spec = load_spec("default")
+    def done(job: tuple, outcome: dict[str, object]) -> None:
+        runs[job] = outcome
+        if on_run is not None:
+            name, difficulty, value, mode, seed, _ = job
+            on_run(f"{name} {difficulty}={value:g} {mode} seed {seed}")
+
+    if jobs <= 1:
+        for job in work:
+            done(job, _terrain_run(job))
+    else:
+        # Spawned, not forked: a fork of a process holding rendering contexts and thread
+        # pools can deadlock.
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+            futures = {pool.submit(_terrain_run, job): job for job in work}
+            for future in as_completed(futures):
+                done(futures[future], future.result())
     rows = []
-    totals = {"planned": [0, 0], "blind": [0, 0]}
-    for name, difficulty, values in TERRAIN_SWEEP:
-        for value in values:
-            for mode in ("planned", "blind"):
-                outcome = {
-                    "runs": 0,
-                    "successes": 0,
-                    "falls": 0,
-                    "invalid_footholds": 0,
-                    "frozen": 0,
-                }
-                tilts, wall = [], 0.0
-                for seed in range(seeds):
-                    terrain = _terrain_for(name, difficulty, value, seed)
-                    settings = WalkSettings(
-                        terrain=name,
-                        seconds=seconds,
-                        blind=mode == "blind",
-                        seed=seed,
-                        stop_at_goal=True,
-                    )
-                    m = simulate_walk(spec, settings, terrain=terrain).metrics
-                    success = (
-                        bool(m["reached_goal"]) and not m["fell"] and m["invalid_footholds"] == 0
-                    )
-                    outcome["runs"] += 1
-                    outcome["successes"] += success
-                    outcome["falls"] += bool(m["fell"])
-                    outcome["invalid_footholds"] += int(m["invalid_footholds"])
-                    outcome["frozen"] += bool(m["frozen"])
-                    tilts.append(float(m["tilt_max_deg"]))
-                    wall += float(m["wall_seconds"])
-                    totals[mode][0] += success
-                    totals[mode][1] += 1
-                    if on_run is not None:
-                        on_run(f"{name} {difficulty}={value:g} {mode} seed {seed}")
-                rows.append(
-                    {
-                        "terrain": name,
-                        "difficulty": difficulty,
-                        "value": value,
-                        "mode": mode,
-                        **outcome,
-                        "median_tilt_max_deg": float(np.median(tilts)),
-                        "wall_seconds": wall,
-                    }
-                )
+    for config in configs:
+        outcomes = [runs[(*config, seed, seconds)] for seed in range(seeds)]
+        name, difficulty, value, mode = config
+        rows.append(
+            {
+                "terrain": name,
+                "difficulty": difficulty,
+                "value": value,
+                "mode": mode,
+                "runs": len(outcomes),
+                "successes": sum(bool(o["success"]) for o in outcomes),
+                "falls": sum(bool(o["fell"]) for o in outcomes),
+                "invalid_footholds": sum(int(o["invalid_footholds"]) for o in outcomes),
+                "frozen": sum(bool(o["frozen"]) for o in outcomes),
+                "median_tilt_max_deg": float(np.median([o["tilt_max_deg"] for o in outcomes])),
+                "wall_seconds": float(sum(o["wall_seconds"] for o in outcomes)),
+            }
+        )
+
+    def rate(mode: str) -> float:
+        mine = [r for r in rows if r["mode"] == mode]
+        return sum(r["successes"] for r in mine) / max(sum(r["runs"] for r in mine), 1)
+
     return {
         "seeds": seeds,
         "results": rows,
-        "planned_success_rate": totals["planned"][0] / max(totals["planned"][1], 1),
-        "blind_success_rate": totals["blind"][0] / max(totals["blind"][1], 1),
+        "planned_success_rate": rate("planned"),
+        "blind_success_rate": rate("blind"),
     }
 
 

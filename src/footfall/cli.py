@@ -16,6 +16,10 @@ from footfall.errors import FootfallError
 from footfall.motion.gait import GaitConfig, GaitKind, WalkCommand
 from footfall.robot.spec import BUILTIN_ROBOTS, load_spec
 
+# Largest height range within a flat map cell in one frame for recorded data [m]: a real
+# depth sensor's noise spans several millimetres (the simulated camera is noise-free).
+REAL_MAX_CELL_SPREAD = 0.01
+
 DEFAULT_SPEED_MPS = 0.10
 
 
@@ -96,7 +100,12 @@ def _walk_parser(subparsers: argparse._SubParsersAction) -> None:
         "--seed",
         type=int,
         default=0,
-        help="seed of random terrains (cobblestones); runs with the same seed are identical",
+        help="seed of the terrain (lays the cobblestones, shifts the stairs' start by up to "
+        "10 cm); runs with the same seed are identical",
+    )
+    p.add_argument("--rise", type=float, help="stairs: step height in m (default 0.04)")
+    p.add_argument(
+        "--groove", type=float, help="cobblestones: groove width between stones in m (0.03)"
     )
     p.add_argument("--out", type=Path, default=Path("footfall-out/walk"), help="output folder")
     p.set_defaults(handler=_walk)
@@ -105,6 +114,7 @@ def _walk_parser(subparsers: argparse._SubParsersAction) -> None:
 def _walk(args: argparse.Namespace, console: Console) -> int:
     from footfall.plots import plot_footholds, plot_walk
     from footfall.sim.model import CameraMount
+    from footfall.sim.terrain import make_terrain
     from footfall.sim.walk import TrueScores, WalkSettings, simulate_walk
 
     spec = load_spec(args.robot)
@@ -119,6 +129,16 @@ def _walk(args: argparse.Namespace, console: Console) -> int:
         )
     height = spec.body_height if args.height is None else args.height
     width, image_height = args.image_size
+    terrain_params = {}
+    for option, value, kind in (
+        ("rise", args.rise, "stairs"),
+        ("groove", args.groove, "cobblestones"),
+    ):
+        if value is not None:
+            if args.terrain != kind:
+                raise FootfallError(f"--{option} applies to --terrain {kind} only")
+            terrain_params[option] = value
+    terrain = make_terrain(args.terrain, args.seed, **terrain_params)
     settings = WalkSettings(
         terrain=args.terrain,
         seconds=args.seconds,
@@ -137,12 +157,15 @@ def _walk(args: argparse.Namespace, console: Console) -> int:
     )
     with _sim_progress(console) as progress:
         task = progress.add_task("walk", total=args.seconds)
-        result = simulate_walk(spec, settings, on_tick=lambda t: progress.update(task, completed=t))
+        result = simulate_walk(
+            spec, settings, on_tick=lambda t: progress.update(task, completed=t), terrain=terrain
+        )
 
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     metrics = dict(result.metrics)
     metrics["mujoco_warnings"] = result.warnings
+    metrics["terrain_params"] = terrain_params
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     title = f"{spec.name}: {args.gait} gait at {speed:.3f} m/s on {args.terrain} terrain"
     plot_walk(
@@ -258,6 +281,14 @@ def _map_parser(subparsers: argparse._SubParsersAction) -> None:
         help="per-cell fusion rule",
     )
     p.add_argument(
+        "--max-cell-spread",
+        type=float,
+        default=None,
+        help="height range in m within one cell in one frame (beyond its slope) above which "
+        "the cell straddles an edge; default: the score's for the simulated camera, "
+        f"{REAL_MAX_CELL_SPREAD} for a recorded sequence (a real sensor's noise spans mm)",
+    )
+    p.add_argument(
         "--tum", type=Path, default=None, help="map this TUM-layout sequence instead of simulating"
     )
     p.add_argument(
@@ -290,6 +321,9 @@ def _map(args: argparse.Namespace, console: Console) -> int:
 
     map_config = HeightMapConfig(fusion=args.fusion)
     score_config = ScoreConfig()
+    if args.max_cell_spread is not None or args.tum is not None:
+        spread = REAL_MAX_CELL_SPREAD if args.max_cell_spread is None else args.max_cell_spread
+        score_config = ScoreConfig(max_cell_spread=spread)
     out: Path = args.out
     if args.tum is not None:
         from footfall.datasets.tum import map_tum_sequence
@@ -446,6 +480,9 @@ def _bench_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     terrain.add_argument("--seconds", type=float, default=90.0, help="longest walk in seconds")
     terrain.add_argument(
+        "--jobs", type=int, default=1, help="walks simulated at once, one process each"
+    )
+    terrain.add_argument(
         "--out", type=Path, default=Path("footfall-out/bench-terrain"), help="output folder"
     )
     terrain.set_defaults(handler=_bench_terrain)
@@ -473,6 +510,8 @@ def _bench_terrain(args: argparse.Namespace, console: Console) -> int:
 
     if args.seeds < 1:
         raise FootfallError(f"--seeds must be at least 1, got {args.seeds}")
+    if args.jobs < 1:
+        raise FootfallError(f"--jobs must be at least 1, got {args.jobs}")
     with Progress(
         TextColumn("{task.description}"),
         BarColumn(),
@@ -485,6 +524,7 @@ def _bench_terrain(args: argparse.Namespace, console: Console) -> int:
             args.seeds,
             args.seconds,
             on_run=lambda label: progress.update(task, advance=1, description=label),
+            jobs=args.jobs,
         )
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "bench.json").write_text(json.dumps(bench, indent=2) + "\n")

@@ -141,10 +141,11 @@ class WalkController:
 
     Without a planner the controller walks blind on the plane z = 0 (the thesis'
     baseline). With a :class:`~footfall.planning.terrain_planner.TerrainPlanner` it moves
-    every foothold to the nearest acceptable cell of the map, keeps the body its commanded
-    height above the floor estimate, lifts swing paths over the mapped terrain, and freezes
-    with all feet down when a swinging leg has no acceptable foothold; it resumes when the
-    command or the map changes.
+    every foothold to the nearest acceptable cell of the map, plans the body height with the
+    footholds (the commanded height above the floor estimate where every leg reaches its
+    foot, else the nearest height where they do), slows a step down where footholds are
+    scarce, lifts swing paths over the mapped terrain, and freezes with all feet down when a
+    swinging leg has no acceptable foothold; it resumes when the command or the map changes.
 
     Args:
         spec: The robot.
@@ -628,13 +629,11 @@ class WalkController:
             return nominal
         n = len(self.config.groups)
         remaining = max(self.step_start + self.step_duration - (self._time or 0.0), 0.0)
-        # Check footholds against the commanded motion (not the governed one, which may be
-        # zero while the body waits): the body will travel that far if the legs allow.
-        vx, vy = (
-            self._velocity[0] * self._step_speed_scale,
-            self._velocity[1] * self._step_speed_scale,
-        )
-        yaw_rate = self._yaw_rate * self._step_speed_scale
+        # Check footholds against the commanded motion at this step's speed scale (not the
+        # governed one, which may be zero while the body waits): the body will travel that
+        # far if the legs allow.
+        k = self._step_speed_scale
+        vx, vy, yaw_rate = self._velocity[0] * k, self._velocity[1] * k, self._yaw_rate * k
 
         def pose_after(seconds: float) -> PlanarPose:
             return self.pose.moved((vx, vy), yaw_rate, seconds)

@@ -79,8 +79,8 @@ class FootholdPlan:
         nominal: The nominal targets the search started from, shape (6, 3) [m].
         adjusted: Which swinging legs were moved off their nominal cell, shape (6,).
         body_z: The body heights in the world, ascending, at which every leg reaches its
-            foot: supporting feet now and at touchdown, the chosen footholds at touchdown
-            and lift-off [m].
+            foot: supporting feet now and at touchdown, the chosen footholds from the body
+            now (it may stop at any time), at touchdown and at lift-off [m].
     """
 
     targets: npt.NDArray[np.float64]
@@ -192,7 +192,11 @@ class TerrainPlanner:
                 nonlocal chosen_heights
                 centre = np.array([point[0], point[1], point[2] + r])
                 ok = feasible & self._reach_heights(
-                    leg, centre, (poses.touchdown, poses.liftoff), heights, c.reach_margin
+                    leg,
+                    centre,
+                    (poses.now, poses.touchdown, poses.liftoff),
+                    heights,
+                    c.reach_margin,
                 )
                 if not ok.any():
                     return False

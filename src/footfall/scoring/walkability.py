@@ -20,6 +20,7 @@ valid, its grooves and edges are not.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,7 +43,9 @@ class ScoreConfig:
         kernel_sigma: Standard deviation of the Gaussian ``K`` [cells].
         threshold: Cells scoring at or above this are invalid.
         max_cell_spread: A cell whose points have spanned more height than this within one
-            frame straddles an edge or a groove too narrow for the grid, and is invalid [m].
+            frame, beyond what its slope explains, straddles an edge or a groove too narrow
+            for the grid, and is invalid [m]. A 1 cm groove seen from the camera's height
+            and distance shows only about 5 mm of its depth.
     """
 
     slope_weight: float = 1.0
@@ -50,7 +53,7 @@ class ScoreConfig:
     kernel_size: int = 5
     kernel_sigma: float = 1.0
     threshold: float = 0.5
-    max_cell_spread: float = 0.008
+    max_cell_spread: float = 0.002
 
     def __post_init__(self) -> None:
         if self.kernel_size < 3 or self.kernel_size % 2 == 0:
@@ -125,16 +128,76 @@ def score_heights(
     return slope, proximity, score, valid
 
 
+def edge_cells(
+    spread: npt.ArrayLike, slope: npt.ArrayLike, resolution: float, config: ScoreConfig
+) -> npt.NDArray[np.bool_]:
+    """Cells that straddle an edge: their points span more height than a plane would.
+
+    A plane at the least slope around the cell (a ramp's, not a step's, whose Sobel slope
+    is high on the step's cells only) spans ``slope * diagonal`` by itself.
+
+    Args:
+        spread: Height range of the points in each cell, NaN where unknown [m].
+        slope: Sobel slope (rise over run), NaN where unknown.
+        resolution: Cell side [m].
+        config: Score parameters (``max_cell_spread``).
+    """
+    least = ndimage.minimum_filter(np.nan_to_num(np.asarray(slope), nan=0.0), size=3)
+    planar = least * resolution * math.sqrt(2.0)
+    return np.nan_to_num(np.asarray(spread), nan=0.0) > config.max_cell_spread + planar
+
+
+def step_cells(
+    heights: npt.ArrayLike, slope: npt.ArrayLike, resolution: float, config: ScoreConfig
+) -> npt.NDArray[np.bool_]:
+    """Cells on either side of a height step to a neighbour (along x or y).
+
+    Each cell holds the highest point that fell in it, so a groove too narrow for the
+    camera to see into still shows where the stones beside it differ in height: a step
+    between neighbouring cells of more than ``max_cell_spread``, beyond what the least
+    slope around explains, marks an edge in one of the two cells.
+
+    Args:
+        heights: Cell heights, NaN where unknown [m].
+        slope: Sobel slope (rise over run), NaN where unknown.
+        resolution: Cell side [m].
+        config: Score parameters (``max_cell_spread``).
+    """
+    h = np.asarray(heights, dtype=np.float64)
+    least = ndimage.minimum_filter(np.nan_to_num(np.asarray(slope), nan=0.0), size=3)
+    limit = config.max_cell_spread + least * resolution
+    out = np.zeros(h.shape, dtype=bool)
+    for low, high in (
+        ((slice(None, -1), slice(None)), (slice(1, None), slice(None))),  # along x
+        ((slice(None), slice(None, -1)), (slice(None), slice(1, None))),  # along y
+    ):
+        rise = np.nan_to_num(np.abs(h[high] - h[low]), nan=0.0)
+        step = rise > np.maximum(limit[low], limit[high])
+        out[low] |= step
+        out[high] |= step
+    return out
+
+
 def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> ScoreMap:
     """Score a height-map snapshot.
 
-    A cell with a large height spread straddles an edge, and is invalid; so are its eight
-    neighbours, whose proximity scores cannot be trusted: the edge may lie anywhere in the
-    straddling cell, whose height shows one side of it only.
+    A cell that straddles an edge (:func:`edge_cells`) or borders a height step
+    (:func:`step_cells`) is invalid, and so are its eight neighbours: the edge may lie
+    anywhere in it. Its height shows whichever side of the
+    edge the last frame saw, so it is scored at the higher side (the highest of its
+    neighbours): a foot nearby keeps its distance from the top of the edge.
     """
     c = config or ScoreConfig()
     slope, proximity, score, valid = score_heights(snapshot.heights, snapshot.resolution, c)
-    if snapshot.spread is not None:
-        edge = np.nan_to_num(snapshot.spread, nan=0.0) > c.max_cell_spread
+    if snapshot.spread is None:
+        return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)
+    edge = edge_cells(snapshot.spread, slope, snapshot.resolution, c) | step_cells(
+        snapshot.heights, slope, snapshot.resolution, c
+    )
+    if edge.any():
+        heights = snapshot.heights.copy()
+        top = ndimage.maximum_filter(np.nan_to_num(heights, nan=-np.inf), size=3)
+        heights[edge] = top[edge]
+        slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c)
         valid &= ~ndimage.binary_dilation(edge, structure=np.ones((3, 3), dtype=bool))
     return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)

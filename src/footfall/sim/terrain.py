@@ -120,7 +120,7 @@ class Stairs(Terrain):
     @property
     def end_x(self) -> float:
         """Where the last step down ends [m]."""
-        return self.start_x + 2 * (self.steps - 1) * self.tread + self.landing + 2 * self.tread
+        return self.start_x + 2 * (self.steps - 1) * self.tread + self.landing
 
     @property
     def goal(self) -> tuple[float, float]:  # type: ignore[override]
@@ -313,6 +313,9 @@ class Course(Terrain):
 def make_terrain(name: str, seed: int = 0, **params: float) -> Terrain:
     """A terrain by name (see ``TERRAIN_NAMES``), with optional parameters.
 
+    The seed lays the cobblestones, and shifts the staircase's first step by up to 10 cm
+    (unless ``start_x`` is given), so that footholds fall differently on every seed.
+
     Raises:
         ConfigError: On an unknown name or parameter.
     """
@@ -327,6 +330,9 @@ def make_terrain(name: str, seed: int = 0, **params: float) -> Terrain:
     try:
         if name == "cobblestones":
             return Cobblestones(seed=seed, **params)
+        if name == "stairs" and "start_x" not in params:
+            shift = float(np.random.default_rng(seed).uniform(-0.1, 0.1))
+            params = {**params, "start_x": Stairs.start_x + shift}
         return kinds[name](**params)
     except TypeError as exc:
         raise ConfigError(f"terrain {name!r}: {exc}") from exc

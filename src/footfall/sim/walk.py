@@ -19,7 +19,7 @@ from footfall.motion.planar import PlanarPose
 from footfall.motion.walker import FeedbackConfig, GaitState, TouchdownRecord, WalkController
 from footfall.planning.terrain_planner import TerrainPlanner, TerrainPlannerConfig
 from footfall.robot.spec import HexapodSpec
-from footfall.scoring.walkability import ScoreConfig, ScoreMap, score_heights
+from footfall.scoring.walkability import ScoreConfig, ScoreMap, edge_cells, score_heights
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import CameraMount
 from footfall.sim.perception import SimPerception
@@ -103,7 +103,18 @@ class WalkResult:
 
 
 class TrueScores:
-    """The ground-truth terrain scored on a grid: which cells a foot may really use."""
+    """The ground-truth terrain scored on a grid: which cells a foot may really use.
+
+    Each cell takes the highest point of the true terrain inside it (sampled on a
+    ``SUBSAMPLES`` x ``SUBSAMPLES`` grid), and a cell whose samples span more height than
+    the score's ``max_cell_spread`` beyond what its slope explains is invalid: the rules
+    the mapper and the scorer apply to the points that fall in a cell, so this is the score
+    map a perfect camera would give. (Sampling the cell centre only would leave a cell whose
+    centre lies on an edge, as 6 cm grooves between 16 cm stones put every edge, to
+    floating-point rounding.)
+    """
+
+    SUBSAMPLES = 4
 
     def __init__(
         self, terrain: Terrain, resolution: float, score: ScoreConfig, extent: tuple[float, ...]
@@ -111,11 +122,16 @@ class TrueScores:
         x0, x1, y0, y1 = extent
         self.origin = (x0, y0)
         self.resolution = resolution
-        xs = x0 + (np.arange(round((x1 - x0) / resolution)) + 0.5) * resolution
-        ys = y0 + (np.arange(round((y1 - y0) / resolution)) + 0.5) * resolution
-        _, _, self.score, self.valid = score_heights(
-            terrain.height(xs[:, None], ys[None, :]), resolution, score
-        )
+        k = self.SUBSAMPLES
+        inner = (np.arange(k) + 0.5) / k * resolution
+        xs = x0 + np.arange(round((x1 - x0) / resolution))[:, None] * resolution + inner
+        ys = y0 + np.arange(round((y1 - y0) / resolution))[:, None] * resolution + inner
+        heights = terrain.height(xs.ravel()[:, None], ys.ravel()[None, :])
+        cells = heights.reshape(len(xs), k, len(ys), k)
+        top = cells.max(axis=(1, 3))
+        self.slope, _, self.score, self.valid = score_heights(top, resolution, score)
+        spread = top - cells.min(axis=(1, 3))
+        self.valid &= ~edge_cells(spread, self.slope, resolution, score)
 
     def valid_at(self, xy: npt.ArrayLike) -> bool:
         """Whether the true terrain is walkable at a world point (off the grid: flat, valid)."""

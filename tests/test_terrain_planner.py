@@ -1,0 +1,139 @@
+"""The terrain planner: footholds planned together with the body height."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from footfall.mapping.height_map import MapSnapshot
+from footfall.motion.kinematics import LegKinematics
+from footfall.motion.planar import PlanarPose
+from footfall.planning.terrain_planner import StepPoses, TerrainPlanner
+from footfall.scoring.walkability import score_map
+
+RES = 0.02
+FRONT = np.array([True, False, False, False, False, True])  # LF and RF swing
+SUPPORT_AFTER = np.array([True, False, True, True, False, True])  # a ripple-like support
+
+
+def _planner(spec, heights: np.ndarray) -> TerrainPlanner:
+    """A planner over a map with the given heights; cell [0, 0] has its corner at (-1, -1)."""
+    snapshot = MapSnapshot(
+        heights=heights,
+        known=np.isfinite(heights),
+        origin=(-1.0, -1.0),
+        resolution=RES,
+        spread=np.zeros_like(heights),
+    )
+    planner = TerrainPlanner(spec)
+    planner.update(snapshot, score_map(snapshot))
+    return planner
+
+
+def _ledge(drop: float, edge_x: float) -> np.ndarray:
+    """Flat ground at 0 for x < edge_x, ``-drop`` beyond (a step down)."""
+    x = -1.0 + (np.arange(100) + 0.5) * RES
+    return np.where(x[:, None] < edge_x, 0.0, -drop) * np.ones((1, 100))
+
+
+def _standing_feet(spec) -> np.ndarray:
+    feet = spec.rest_feet_in_body()
+    feet[:, 2] = spec.foot_radius
+    return feet
+
+
+def _poses() -> StepPoses:
+    here = PlanarPose()
+    return StepPoses(now=here, touchdown=here, liftoff=here, stable=(here,))
+
+
+def test_a_step_down_is_reached_by_lowering_the_body(default_spec):
+    """Front feet whose nominal footholds lie 12 cm down, beyond what the legs reach from the
+    commanded height, get them: the plan allows only lower bodies, at which every foot
+    (supporting and chosen) is reached."""
+    spec = default_spec
+    drop = 0.12
+    planner = _planner(spec, _ledge(drop, edge_x=0.2))
+    feet = _standing_feet(spec)
+    nominal = feet.copy()
+    nominal[FRONT, 0] += 0.06  # onto the lower level, well clear of the edge
+    nominal[FRONT, 2] = spec.foot_radius - drop
+    kin = LegKinematics(spec)
+    high = spec.body_height + 0.05
+    # From the high body the lower level is out of reach of the front legs.
+    for leg in np.flatnonzero(FRONT):
+        p = nominal[leg] - [0.0, 0.0, high]
+        assert not kin.reachable(int(leg), p, planner.config.reach_margin)
+    heights = high + np.arange(-0.08, 0.0001, 0.005)
+    plan = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), heights)
+    assert not isinstance(plan, str), plan
+    assert plan.body_z.size and plan.body_z.max() < high
+    for z in plan.body_z:
+        for leg in range(6):
+            p = plan.targets[leg] - [0.0, 0.0, z]
+            assert kin.reachable(leg, p), (leg, z)
+    # The chosen front footholds are on the lower level.
+    np.testing.assert_allclose(plan.targets[FRONT, 2], spec.foot_radius - drop)
+
+
+def test_the_body_keeps_its_least_clearance(default_spec):
+    """Terrain under the body rules out the heights that would bring the body within the
+    least clearance; when none is left the plan names the problem."""
+    spec = default_spec
+    flat = np.zeros((100, 100))
+    planner = _planner(spec, flat)
+    feet = _standing_feet(spec)
+    lowest = planner.config.min_body_clearance + 0.5 * spec.body_size[2]
+    heights = np.arange(0.02, 0.2, 0.005)
+    plan = planner.plan(feet, FRONT, SUPPORT_AFTER, feet, _poses(), heights)
+    assert not isinstance(plan, str), plan
+    assert plan.body_z.min() >= lowest - 1e-9
+    too_low = np.arange(0.0, lowest - 0.005, 0.005)
+    reason = planner.plan(feet, FRONT, SUPPORT_AFTER, feet, _poses(), too_low)
+    assert isinstance(reason, str) and "above the terrain under it" in reason
+
+
+@given(st.floats(0.0, 0.1), st.floats(-0.05, 0.05))
+@settings(max_examples=40, deadline=None)
+def test_every_planned_height_reaches_every_foot(default_spec, drop, shift):
+    """Whatever the terrain's step, each height the plan allows reaches every foot with the
+    planner's margins; a plan that cannot says why."""
+    spec = default_spec
+    planner = _planner(spec, _ledge(drop, edge_x=0.1))
+    feet = _standing_feet(spec)
+    nominal = feet.copy()
+    nominal[FRONT, 0] += shift
+    heights = np.arange(0.04, 0.2, 0.005)
+    plan = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), heights)
+    if isinstance(plan, str):
+        assert plan.startswith("leg ") or "body" in plan or "supporting feet" in plan
+        return
+    kin = LegKinematics(spec)
+    for z in plan.body_z:
+        for leg in np.flatnonzero(FRONT):
+            p = plan.targets[leg] - [0.0, 0.0, z]
+            assert kin.reachable(int(leg), p, planner.config.reach_margin - 1e-9)
+        for leg in np.flatnonzero(~FRONT):
+            p = feet[leg] - [0.0, 0.0, z]
+            assert kin.reachable(int(leg), p, 0.5 * planner.config.reach_margin - 1e-9)
+
+
+def test_no_map_no_plan(default_spec):
+    """Before the camera has seen anything the planner says so."""
+    planner = TerrainPlanner(default_spec)
+    feet = _standing_feet(default_spec)
+    reason = planner.plan(feet, FRONT, SUPPORT_AFTER, feet, _poses(), [0.09])
+    assert isinstance(reason, str) and "no map" in reason
+
+
+@pytest.mark.parametrize("leg", range(6))
+def test_vectorised_reach_agrees_with_one_at_a_time(default_spec, leg):
+    """``reachable`` over an array of targets gives what it gives for each alone."""
+    kin = LegKinematics(default_spec)
+    rng = np.random.default_rng(leg)
+    targets = rng.uniform(-0.35, 0.35, (200, 3))
+    many = kin.reachable(leg, targets, 0.01)
+    assert many.shape == (200,) and many.any() and not many.all()
+    assert [kin.reachable(leg, t, 0.01) for t in targets] == list(many)
