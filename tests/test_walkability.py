@@ -14,7 +14,6 @@ from footfall.scoring.walkability import (
     edge_cells,
     score_heights,
     score_map,
-    step_cells,
 )
 from footfall.sim.terrain import Course
 
@@ -152,17 +151,3 @@ def test_an_edge_cell_and_its_neighbours_are_invalid_and_scored_at_the_top():
     _, _, plain, _ = score_heights(heights, 0.02, CONFIG)
     assert scores.score[15, 13] > plain[15, 13] + 0.1
     assert scores.valid[15, 5] and scores.valid[15, 25]
-
-
-def test_a_step_between_cells_marks_both_as_edge_cells_but_not_a_ramp():
-    """Stones of different heights beside a groove the camera cannot see into: the step
-    between their cells' heights marks the cells on both sides; a ramp's steady rise does
-    not."""
-    heights = np.zeros((20, 20))
-    heights[:, 10:] = 0.005
-    slope, _, _, _ = score_heights(heights, 0.02, CONFIG)
-    steps = step_cells(heights, slope, 0.02, CONFIG)
-    assert steps[:, 9:11].all() and steps.sum() == 40
-    ramp = 0.3 * 0.02 * np.arange(20)[:, None] * np.ones((1, 20))
-    slope, _, _, _ = score_heights(ramp, 0.02, CONFIG)
-    assert not step_cells(ramp, slope, 0.02, CONFIG)[2:-2, 2:-2].any()

@@ -119,3 +119,28 @@ def test_speed_above_the_gait_maximum_is_capped(default_spec):
     controller = WalkController(default_spec, GaitConfig(kind="wave"))
     list(drive(controller, WalkCommand(speed=1.0), 5.0))
     assert np.hypot(*controller.body_velocity_in_body) <= controller.config.max_speed + 1e-9
+
+
+@pytest.mark.parametrize("overshoot_deg", [5.0, 20.0])
+def test_a_swing_past_the_coxa_range_is_turned_back(default_spec, overshoot_deg):
+    """A swinging foot asked to go beyond its coxa's range (the body lagging behind the
+    plan) is brought back to the edge of the range, at the same reach, not refused."""
+    from footfall.motion.kinematics import LegKinematics
+
+    controller = WalkController(default_spec)
+    controller.swinging[0] = True
+    kin = LegKinematics(default_spec)
+    rest = default_spec.rest_feet_in_body()
+    yaw = kin.upper[0] + np.radians(overshoot_deg)
+    in_leg = np.zeros((6, 3))
+    in_leg[0] = [0.17 * np.cos(yaw), 0.17 * np.sin(yaw), -0.06]
+    feet = rest.copy()
+    feet[0] = kin.leg_to_body(in_leg)[0]
+    assert not kin.reachable(0, feet[0])
+    fixed = controller._within_reach(feet)
+    assert kin.reachable(0, fixed[0])
+    back_in_leg = kin.body_to_leg(fixed)[0]
+    assert np.degrees(np.arctan2(back_in_leg[1], back_in_leg[0])) == pytest.approx(
+        np.degrees(kin.upper[0]), abs=0.1
+    )
+    np.testing.assert_allclose(fixed[1:], feet[1:])  # other legs untouched

@@ -746,23 +746,43 @@ class WalkController:
 
     # Kinematics ---------------------------------------------------------------------------
     def _within_reach(self, feet_in_body: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
-        """Bring a swinging foot that left its leg's workspace back in by lowering it.
+        """Bring a swinging foot that left its leg's workspace back in.
 
         A swing lifted over the terrain can ask for more than a leg reaches near the body;
-        the foot then flies as high as the leg allows. Supporting feet are never moved: if
-        one is out of reach, inverse kinematics raises and the robot freezes.
+        the foot then flies as high as the leg allows. A swing whose path sweeps past the
+        coxa's range (the body lagging behind the plan) is turned back to the range's edge.
+        Supporting feet are never moved: if one is out of reach, inverse kinematics raises
+        and the robot freezes.
         """
-        out = feet_in_body
+        out = feet_in_body.copy()
         for leg in np.flatnonzero(self.swinging):
             if self.kinematics.reachable(leg, out[leg]):
                 continue
-            for drop in np.arange(0.005, 0.1001, 0.005):
-                lowered = out[leg] - [0.0, 0.0, drop]
-                if self.kinematics.reachable(leg, lowered):
-                    out = out.copy()
-                    out[leg] = lowered
+            for candidate in (out[leg], self._within_coxa_range(int(leg), out[leg])):
+                drops = np.arange(0.0, 0.1001, 0.005)
+                lowered = candidate - np.outer(drops, [0.0, 0.0, 1.0])
+                ok = self.kinematics.reachable(int(leg), lowered)
+                if ok.any():
+                    out[leg] = lowered[int(np.argmax(ok))]
                     break
         return out
+
+    def _within_coxa_range(
+        self, leg: int, foot_in_body: npt.NDArray[np.float64]
+    ) -> npt.NDArray[np.float64]:
+        """The foot turned about the coxa axis to within the coxa's joint range [m]."""
+        points = np.zeros((6, 3))
+        points[leg] = foot_in_body
+        in_leg = self.kinematics.body_to_leg(points)[leg]
+        margin = 1e-3
+        yaw = np.clip(
+            math.atan2(in_leg[1], in_leg[0]),
+            self.kinematics.lower[0] + margin,
+            self.kinematics.upper[0] - margin,
+        )
+        radius = math.hypot(in_leg[0], in_leg[1])
+        points[leg] = [radius * math.cos(yaw), radius * math.sin(yaw), in_leg[2]]
+        return self.kinematics.leg_to_body(points)[leg]
 
     def _solve(
         self, swing_velocity_in_world: npt.NDArray[np.float64], scale: float, yaw_rate: float

@@ -147,43 +147,11 @@ def edge_cells(
     return np.nan_to_num(np.asarray(spread), nan=0.0) > config.max_cell_spread + planar
 
 
-def step_cells(
-    heights: npt.ArrayLike, slope: npt.ArrayLike, resolution: float, config: ScoreConfig
-) -> npt.NDArray[np.bool_]:
-    """Cells on either side of a height step to a neighbour (along x or y).
-
-    Each cell holds the highest point that fell in it, so a groove too narrow for the
-    camera to see into still shows where the stones beside it differ in height: a step
-    between neighbouring cells of more than ``max_cell_spread``, beyond what the least
-    slope around explains, marks an edge in one of the two cells.
-
-    Args:
-        heights: Cell heights, NaN where unknown [m].
-        slope: Sobel slope (rise over run), NaN where unknown.
-        resolution: Cell side [m].
-        config: Score parameters (``max_cell_spread``).
-    """
-    h = np.asarray(heights, dtype=np.float64)
-    least = ndimage.minimum_filter(np.nan_to_num(np.asarray(slope), nan=0.0), size=3)
-    limit = config.max_cell_spread + least * resolution
-    out = np.zeros(h.shape, dtype=bool)
-    for low, high in (
-        ((slice(None, -1), slice(None)), (slice(1, None), slice(None))),  # along x
-        ((slice(None), slice(None, -1)), (slice(None), slice(1, None))),  # along y
-    ):
-        rise = np.nan_to_num(np.abs(h[high] - h[low]), nan=0.0)
-        step = rise > np.maximum(limit[low], limit[high])
-        out[low] |= step
-        out[high] |= step
-    return out
-
-
 def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> ScoreMap:
     """Score a height-map snapshot.
 
-    A cell that straddles an edge (:func:`edge_cells`) or borders a height step
-    (:func:`step_cells`) is invalid, and so are its eight neighbours: the edge may lie
-    anywhere in it. Its height shows whichever side of the
+    A cell that straddles an edge (:func:`edge_cells`) is invalid, and so are its eight
+    neighbours: the edge may lie anywhere in it. Its height shows whichever side of the
     edge the last frame saw, so it is scored at the higher side (the highest of its
     neighbours): a foot nearby keeps its distance from the top of the edge.
     """
@@ -191,9 +159,7 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
     slope, proximity, score, valid = score_heights(snapshot.heights, snapshot.resolution, c)
     if snapshot.spread is None:
         return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)
-    edge = edge_cells(snapshot.spread, slope, snapshot.resolution, c) | step_cells(
-        snapshot.heights, slope, snapshot.resolution, c
-    )
+    edge = edge_cells(snapshot.spread, slope, snapshot.resolution, c)
     if edge.any():
         heights = snapshot.heights.copy()
         top = ndimage.maximum_filter(np.nan_to_num(heights, nan=-np.inf), size=3)
