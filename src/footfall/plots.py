@@ -272,14 +272,20 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
         1, len(terrains), figsize=(4.5 * len(terrains), 4), constrained_layout=True
     )
     for ax, terrain in zip(np.atleast_1d(axes), terrains, strict=True):
-        for mode, style in (("planned", "o-"), ("blind", "s--")):
-            sel = [r for r in rows if r["terrain"] == terrain and r["mode"] == mode]
-            x = [r["value"] for r in sel]
-            y = [r["successes"] / max(r["runs"], 1) for r in sel]
-            ax.plot(x, y, style, label=mode)
         difficulty = next(r["difficulty"] for r in rows if r["terrain"] == terrain)
+        for k, (mode, style) in enumerate((("planned", "o-"), ("blind", "s--"))):
+            sel = [r for r in rows if r["terrain"] == terrain and r["mode"] == mode]
+            y = [r["successes"] / max(r["runs"], 1) for r in sel]
+            if difficulty == "none":  # one layout: a bar per mode
+                ax.bar([k], y, width=0.6, color=f"C{k}", label=mode)
+            else:
+                ax.plot([r["value"] for r in sel], y, style, label=mode)
         ax.set_title(terrain)
-        ax.set_xlabel(f"{difficulty} [m]" if difficulty != "none" else "(single layout)")
+        if difficulty == "none":
+            ax.set_xticks([0, 1], ["planned", "blind"])
+            ax.set_xlabel("(single layout)")
+        else:
+            ax.set_xlabel(f"{difficulty} [m]")
         ax.set_ylabel("success rate")
         ax.set_ylim(-0.05, 1.05)
         ax.grid(alpha=0.3)
