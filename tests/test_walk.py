@@ -116,3 +116,17 @@ def test_slip_metric_tells_rolling_from_sliding():
     assert stance_slip_m(_stance_log(pivoting, rotations), r)[0] == pytest.approx(
         expected, rel=1e-6
     )
+
+
+def test_fall_tells_a_collapse_from_a_body_lowered_on_purpose():
+    """Low over the ground is a fall only when the body is also well below where the
+    controller holds it; a large tilt is a fall."""
+    from footfall.metrics import fallen
+
+    commanded = 0.09
+    # Lowered on purpose to 3.5 cm above a step's edge: the controller holds it there.
+    assert not fallen(0.5, 0.035, 0.355, 0.356, commanded)
+    # Collapsed: 2 cm above the ground, 7 cm below its reference.
+    assert fallen(0.5, 0.02, 0.02, 0.09, commanded)
+    assert fallen(35.0, 0.09, 0.09, 0.09, commanded)
+    assert not fallen(1.0, 0.09, 0.09, 0.09, commanded)

@@ -105,6 +105,26 @@ def swing_apexes_m(
     return np.asarray(apexes)
 
 
+def fallen(
+    tilt_deg: npt.ArrayLike,
+    height_above_ground: npt.ArrayLike,
+    body_z: npt.ArrayLike,
+    reference_body_z: npt.ArrayLike,
+    commanded_height: npt.ArrayLike,
+) -> npt.NDArray[np.bool_]:
+    """Whether the body has fallen, per sample.
+
+    Tilted beyond ``FALL_TILT_DEG``, or sunk below ``FALL_HEIGHT_FRACTION`` of the
+    commanded height above the ground under its centre while also that far below where
+    the controller holds it (a body lowered on purpose over a step's edge has not fallen).
+    """
+    sunk = np.asarray(height_above_ground) < FALL_HEIGHT_FRACTION * np.asarray(commanded_height)
+    dropped = np.asarray(body_z) < np.asarray(reference_body_z) - FALL_HEIGHT_FRACTION * (
+        np.asarray(commanded_height)
+    )
+    return (np.asarray(tilt_deg) > FALL_TILT_DEG) | (sunk & dropped)
+
+
 def walk_metrics(
     log: WalkLog,
     commanded_speed_mps: float,
@@ -127,7 +147,10 @@ def walk_metrics(
         The ``metrics.json`` content: ``distance_m``, ``mean_speed_mps``,
         ``commanded_speed_mps``, ``fell``, ``body_height_error_mean_m`` (measured minus
         commanded, so a sagging body is negative), ``body_height_oscillation_ratio``
-        (peak-to-peak height after the first 2 s over the commanded height),
+        (peak-to-peak height above the ground under the body after the first 2 s over the
+        commanded height; on steps it includes the rises), ``body_z_tracking_error_mean_m``
+        and ``body_z_tracking_error_ptp_m`` (measured body height minus the controller's
+        reference after the first 2 s: how well the body follows its planned height),
         ``tilt_max_deg``, ``tilt_rms_deg``, ``sim_seconds``, ``wall_seconds``,
         ``realtime_factor``, and more.
     """
@@ -143,8 +166,9 @@ def walk_metrics(
     if not steady.any():
         steady = np.ones_like(t, dtype=bool)
     fell = bool(
-        np.any(tilt_deg > FALL_TILT_DEG) or np.any(height < FALL_HEIGHT_FRACTION * commanded)
+        np.any(fallen(tilt_deg, height, body[:, 2], log.array("reference_body_z"), commanded))
     )
+    tracking = body[steady, 2] - log.array("reference_body_z")[steady]
     slips = stance_slip_m(log, foot_radius)
     apexes = swing_apexes_m(log, foot_radius, ground)
     swinging = log.array("swinging")
@@ -155,6 +179,8 @@ def walk_metrics(
         "fell": fell,
         "body_height_error_mean_m": float(np.mean(height - commanded)),
         "body_height_oscillation_ratio": float(np.ptp(height[steady]) / np.mean(commanded[steady])),
+        "body_z_tracking_error_mean_m": float(np.mean(tracking)),
+        "body_z_tracking_error_ptp_m": float(np.ptp(tracking)),
         "tilt_max_deg": float(tilt_deg.max()),
         "tilt_rms_deg": float(np.sqrt(np.mean(tilt_deg**2))),
         "roll_max_deg": float(np.degrees(np.abs(log.array("roll")).max())),

@@ -13,7 +13,7 @@ import numpy.typing as npt
 from footfall.control_loop import WalkLog, run_control_loop
 from footfall.errors import ConfigError
 from footfall.mapping.height_map import HeightMapConfig
-from footfall.metrics import FALL_HEIGHT_FRACTION, FALL_TILT_DEG, walk_metrics
+from footfall.metrics import fallen, walk_metrics
 from footfall.motion.gait import GaitConfig, WalkCommand
 from footfall.motion.planar import PlanarPose
 from footfall.motion.walker import FeedbackConfig, GaitState, TouchdownRecord, WalkController
@@ -299,9 +299,12 @@ def simulate_walk(
     def stop(log: WalkLog) -> bool:
         body = log.body_position_in_world[-1]
         ground = float(terrain.height(body[0], body[1]))
-        if (
-            log.tilt[-1] > math.radians(FALL_TILT_DEG)
-            or body[2] - ground < FALL_HEIGHT_FRACTION * base.body_height
+        if fallen(
+            math.degrees(log.tilt[-1]),
+            body[2] - ground,
+            body[2],
+            log.reference_body_z[-1],
+            base.body_height,
         ):
             return True
         if settings.stop_at_goal and progress(body[:2]) >= progress(goal) - GOAL_TOLERANCE:
