@@ -10,7 +10,7 @@ import pytest
 
 from footfall.motion.gait import WalkCommand
 from footfall.robot.spec import load_spec
-from footfall.sim.terrain import Terrain, TerrainXml
+from footfall.sim.terrain import Terrain, TerrainXml, make_terrain
 from footfall.sim.walk import WalkSettings, simulate_walk
 
 SPEC = load_spec("default")
@@ -50,6 +50,22 @@ def test_footholds_land_where_planned(stairs_walk):
     ground truth): none of the chosen footholds is on an invalid true cell."""
     assert stairs_walk.metrics["touchdowns"] > 60
     assert all(np.isfinite(t.chosen).all() for t in stairs_walk.touchdowns)
+
+
+def test_eight_centimetre_stairs_are_climbed_and_descended():
+    """Stairs nearly as high as the body: the body height is planned with the footholds,
+    so it rises over each step and lowers itself to step down, keeping every foot in
+    reach; no fall, no invalid foothold, the body a centimetre clear of the edges."""
+    terrain = make_terrain("stairs", seed=3, rise=0.08)
+    settings = WalkSettings(terrain="stairs", seconds=90.0, blind=False, seed=3, stop_at_goal=True)
+    result = simulate_walk(SPEC, settings, terrain=terrain)
+    m = result.metrics
+    assert m["reached_goal"] and not m["fell"] and not m["frozen"]
+    assert m["invalid_footholds"] == 0
+    body = result.log.array("body_position_in_world")
+    under = terrain.height(body[:, 0], body[:, 1])
+    assert np.min(body[:, 2] - under) > 0.5 * SPEC.body_size[2]  # the belly never touches
+    assert abs(m["body_z_tracking_error_mean_m"]) < 0.01
 
 
 def test_planning_beats_the_blind_baseline_on_cobblestones():
