@@ -215,13 +215,19 @@ def plan_path(
             circle = other
         return None
 
-    memo: dict[tuple, list[npt.NDArray] | None] = {}
+    # Sub-path searched between two points, with the depth it was searched from: a
+    # failure found deeper (with less depth left) does not rule out a shallower search.
+    memo: dict[tuple, tuple[list[npt.NDArray] | None, int]] = {}
 
     def search(a: npt.NDArray, b: npt.NDArray, depth: int) -> list[npt.NDArray] | None:
         key = (round(a[0], 9), round(a[1], 9), round(b[0], 9), round(b[1], 9))
-        if key not in memo:
-            memo[key] = expand(a, b, depth)
-        return memo[key]
+        if key in memo:
+            found, searched_at = memo[key]
+            if found is not None or searched_at <= depth:
+                return found
+        found = expand(a, b, depth)
+        memo[key] = (found, depth)
+        return found
 
     def expand(a: npt.NDArray, b: npt.NDArray, depth: int) -> list[npt.NDArray] | None:
         nonlocal nodes
