@@ -181,48 +181,42 @@ class TerrainPlanner:
         targets = feet.copy()
         targets[swinging] = nominal[swinging]
         adjusted = np.zeros(6, dtype=bool)
-        for leg in np.flatnonzero(swinging):
-            chosen_heights = feasible
+        # A foothold is reached from the body now (it may stop at any time) to lift-off.
+        reach_poses = (poses.now, poses.touchdown, poses.liftoff)
+        for leg in (int(k) for k in np.flatnonzero(swinging)):
+
+            def reached_at(
+                centre: npt.NDArray[np.float64], leg: int = leg
+            ) -> npt.NDArray[np.bool_]:
+                return self._reach_heights(leg, centre, reach_poses, heights, c.reach_margin)
 
             def accept(
                 point: npt.NDArray[np.float64],
-                leg: int = int(leg),
-                feasible: npt.NDArray[np.bool_] = feasible,
+                leg: int = leg,
+                allowed: npt.NDArray[np.bool_] = feasible,
             ) -> bool:
-                nonlocal chosen_heights
                 centre = np.array([point[0], point[1], point[2] + r])
-                ok = feasible & self._reach_heights(
-                    leg,
-                    centre,
-                    (poses.now, poses.touchdown, poses.liftoff),
-                    heights,
-                    c.reach_margin,
-                )
-                if not ok.any():
+                if not (allowed & reached_at(centre)).any():
                     return False
                 support = targets[support_after].copy()
                 support[np.flatnonzero(support_after) == leg] = centre
-                if not all(
+                return all(
                     point_in_polygon_margin((pose.x, pose.y), support[:, :2])
                     >= c.footholds.stability_margin
                     for pose in poses.stable
-                ):
-                    return False
-                chosen_heights = ok
-                return True
+                )
 
             foothold = self._search.search(
                 nominal[leg, :2], self.scores, self.snapshot.heights, accept
             )
-            name = self.spec.leg_names[leg]
             if foothold is None:
                 return (
-                    f"leg {name}: no valid, reachable and stable cell within "
-                    f"{c.footholds.search_radius:.2f} m of its nominal foothold "
+                    f"leg {self.spec.leg_names[leg]}: no valid, reachable and stable cell "
+                    f"within {c.footholds.search_radius:.2f} m of its nominal foothold "
                     f"({nominal[leg, 0]:.2f}, {nominal[leg, 1]:.2f}) m"
                 )
-            feasible = chosen_heights
             targets[leg] = foothold.position + [0.0, 0.0, r]
+            feasible = feasible & reached_at(targets[leg])
             adjusted[leg] = foothold.moved > 1e-9
         return FootholdPlan(targets, nominal.copy(), adjusted, heights[feasible])
 

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from scipy import ndimage
 
 from footfall.errors import ConfigError
 from footfall.mapping.height_map import MapSnapshot
@@ -128,6 +127,17 @@ def score_heights(
     return slope, proximity, score, valid
 
 
+def _around(values: npt.NDArray, reduce: np.ufunc) -> npt.NDArray:
+    """``reduce`` (``np.maximum`` or ``np.minimum``) over each cell's 3 x 3 neighbourhood.
+
+    Separable, edge cells padded with their own values: a few whole-array passes, several
+    times faster on a 256 x 256 map than ``scipy.ndimage``'s generic filters.
+    """
+    p = np.pad(values, 1, mode="edge")
+    rows = reduce(reduce(p[:-2], p[1:-1]), p[2:])
+    return reduce(reduce(rows[:, :-2], rows[:, 1:-1]), rows[:, 2:])
+
+
 def edge_cells(
     spread: npt.ArrayLike, slope: npt.ArrayLike, resolution: float, config: ScoreConfig
 ) -> npt.NDArray[np.bool_]:
@@ -142,7 +152,7 @@ def edge_cells(
         resolution: Cell side [m].
         config: Score parameters (``max_cell_spread``).
     """
-    least = ndimage.minimum_filter(np.nan_to_num(np.asarray(slope), nan=0.0), size=3)
+    least = _around(np.nan_to_num(np.asarray(slope, dtype=np.float64), nan=0.0), np.minimum)
     planar = least * resolution * math.sqrt(2.0)
     return np.nan_to_num(np.asarray(spread), nan=0.0) > config.max_cell_spread + planar
 
@@ -162,8 +172,8 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
     edge = edge_cells(snapshot.spread, slope, snapshot.resolution, c)
     if edge.any():
         heights = snapshot.heights.copy()
-        top = ndimage.maximum_filter(np.nan_to_num(heights, nan=-np.inf), size=3)
+        top = _around(np.nan_to_num(heights, nan=-np.inf), np.maximum)
         heights[edge] = top[edge]
         slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c)
-        valid &= ~ndimage.binary_dilation(edge, structure=np.ones((3, 3), dtype=bool))
+        valid &= ~_around(edge, np.logical_or)
     return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)
