@@ -1,13 +1,16 @@
 """Drive the simulated hexapod with your own control loop: a tripod walk that turns.
 
-This is what `footfall walk` does under the hood, without the metrics and plots: the
-controller turns a command into joint targets, the backend (here MuJoCo; on a real robot
-its servo driver) executes them. Runs headless in a few seconds.
+This is what `footfall walk` does under the hood, without the camera, metrics and plots:
+on a bus, the movement node turns each command into effector targets, the servo node turns
+those into joint targets for the backend (here MuJoCo; on a real robot its servo driver).
+Runs headless in a few seconds.
 """
 
 import numpy as np
 
-from footfall import GaitConfig, WalkCommand, WalkController, load_spec
+from footfall import GaitConfig, InProcessBus, Mode, WalkCommand, WalkController, load_spec
+from footfall.control_loop import WalkingGraph
+from footfall.messages import ModeCommand
 from footfall.sim.hexapod import MujocoHexapod
 
 CONTROL_RATE_HZ = 100.0
@@ -20,10 +23,13 @@ def main() -> None:
     command = WalkCommand(
         direction=(1.0, 0.0), speed=0.08, yaw_rate=0.3, body_height=spec.body_height
     )
+    bus = InProcessBus()
+    graph = WalkingGraph.build(bus, robot, controller)
+    bus.publish(ModeCommand.TOPIC, ModeCommand(Mode.WALKING))  # servos start limp
     dt = 1.0 / CONTROL_RATE_HZ
     for k in range(round(4.0 / dt)):
-        robot.command(controller.update(k * dt, command))
-        robot.advance(dt)
+        bus.publish(WalkCommand.TOPIC, command)
+        graph.step(k * dt, dt)  # movement -> servo -> robot, then the robot's new state
     state = robot.read()
     yaw = np.degrees(state.orientation_body_in_world.as_euler("ZYX")[0])
     print(

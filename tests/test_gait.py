@@ -10,10 +10,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from footfall.errors import ConfigError
+from footfall.messages import WalkCommand
 from footfall.motion.gait import (
     GaitConfig,
     GaitKind,
-    WalkCommand,
     active_sextant,
     duty_factor,
     swing_groups,

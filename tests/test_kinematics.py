@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from footfall.errors import SingularConfigurationError, UnreachableTargetError
-from footfall.motion.kinematics import LegKinematics
+from footfall.robot.kinematics import LegKinematics
 from footfall.robot.spec import load_spec
 
 SPECS = {name: load_spec(name) for name in ("default", "phantomx")}

@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from footfall.motion.kinematics import LegKinematics
-from footfall.motion.walker import JointTargets
+from footfall.messages import JointTargets
+from footfall.robot.kinematics import LegKinematics
 from footfall.robot.spec import load_spec
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import hexapod_mjcf

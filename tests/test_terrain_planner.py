@@ -8,9 +8,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from footfall.mapping.height_map import MapSnapshot
-from footfall.motion.kinematics import LegKinematics
-from footfall.motion.planar import PlanarPose
-from footfall.planning.terrain_planner import StepPoses, TerrainPlanner
+from footfall.planning.terrain_planner import NoFoothold, StepPoses, TerrainPlanner
+from footfall.robot.kinematics import LegKinematics
+from footfall.robot.planar import PlanarPose
 from footfall.scoring.walkability import score_map
 
 RES = 0.02
@@ -68,7 +68,7 @@ def test_a_step_down_is_reached_by_lowering_the_body(default_spec):
         assert not kin.reachable(int(leg), p, planner.config.reach_margin)
     heights = high + np.arange(-0.08, 0.0001, 0.005)
     plan = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), heights)
-    assert not isinstance(plan, str), plan
+    assert not isinstance(plan, NoFoothold), plan
     assert plan.body_z.size and plan.body_z.max() < high
     for z in plan.body_z:
         for leg in range(6):
@@ -88,11 +88,11 @@ def test_the_body_keeps_its_least_clearance(default_spec):
     lowest = planner.config.min_body_clearance + 0.5 * spec.body_size[2]
     heights = np.arange(0.02, 0.2, 0.005)
     plan = planner.plan(feet, FRONT, SUPPORT_AFTER, feet, _poses(), heights)
-    assert not isinstance(plan, str), plan
+    assert not isinstance(plan, NoFoothold), plan
     assert plan.body_z.min() >= lowest - 1e-9
     too_low = np.arange(0.0, lowest - 0.005, 0.005)
     reason = planner.plan(feet, FRONT, SUPPORT_AFTER, feet, _poses(), too_low)
-    assert isinstance(reason, str) and "above the terrain under it" in reason
+    assert isinstance(reason, NoFoothold) and "above the terrain under it" in reason.reason
 
 
 @given(st.floats(0.0, 0.1), st.floats(-0.05, 0.05))
@@ -107,8 +107,10 @@ def test_every_planned_height_reaches_every_foot(default_spec, drop, shift):
     nominal[FRONT, 0] += shift
     heights = np.arange(0.04, 0.2, 0.005)
     plan = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), heights)
-    if isinstance(plan, str):
-        assert plan.startswith("leg ") or "body" in plan or "supporting feet" in plan
+    if isinstance(plan, NoFoothold):
+        why = plan.reason
+        assert why.startswith("leg ") or "body" in why or "supporting feet" in why
+        assert plan.leg == (why.split()[1].rstrip(":") if why.startswith("leg ") else "")
         return
     kin = LegKinematics(spec)
     for z in plan.body_z:
@@ -125,7 +127,7 @@ def test_no_map_no_plan(default_spec):
     planner = TerrainPlanner(default_spec)
     feet = _standing_feet(default_spec)
     reason = planner.plan(feet, FRONT, SUPPORT_AFTER, feet, _poses(), [0.09])
-    assert isinstance(reason, str) and "no map" in reason
+    assert isinstance(reason, NoFoothold) and "no map" in reason.reason
 
 
 @pytest.mark.parametrize("leg", range(6))

@@ -8,7 +8,7 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
-from footfall.motion.gait import WalkCommand
+from footfall.messages import WalkCommand
 from footfall.robot.spec import load_spec
 from footfall.sim.terrain import Terrain, TerrainXml, make_terrain
 from footfall.sim.walk import WalkSettings, simulate_walk
@@ -49,7 +49,7 @@ def test_footholds_land_where_planned(stairs_walk):
     """Every planned foothold is on a cell the robot's map scored valid (checked via the
     ground truth): none of the chosen footholds is on an invalid true cell."""
     assert stairs_walk.metrics["touchdowns"] > 60
-    assert all(np.isfinite(t.chosen).all() for t in stairs_walk.touchdowns)
+    assert all(np.isfinite(t.chosen_in_world).all() for t in stairs_walk.touchdowns)
 
 
 def test_eight_centimetre_stairs_are_climbed_and_descended():

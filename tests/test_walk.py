@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from footfall.motion.gait import GaitConfig, WalkCommand
+from footfall.messages import WalkCommand
+from footfall.motion.gait import GaitConfig
 from footfall.robot.spec import load_spec
 from footfall.sim.walk import WalkSettings, simulate_walk
 

@@ -7,8 +7,9 @@ import itertools
 import numpy as np
 import pytest
 
-from footfall.motion.gait import GaitConfig, GaitKind, WalkCommand
-from footfall.motion.walker import GaitState, WalkController
+from footfall.messages import GaitState, WalkCommand
+from footfall.motion.gait import GaitConfig, GaitKind
+from footfall.motion.walker import WalkController
 
 DT = 0.01
 
@@ -100,18 +101,18 @@ def test_stops_and_returns_to_rest(default_spec):
 
 
 def test_unreachable_command_freezes_with_the_leg_named(default_spec):
-    """A body height no leg reaches freezes the robot, holding its last safe joint targets."""
+    """A body height no leg reaches freezes the robot, holding its last safe foot targets."""
     controller = WalkController(default_spec)
     held = None
     for _t, targets in drive(controller, WalkCommand(speed=0.0, body_height=0.5), 10.0):
         if controller.state is GaitState.FROZEN:
-            held = held if held is not None else targets.positions.copy()
-            np.testing.assert_array_equal(targets.positions, held)
+            held = held if held is not None else targets.feet_in_body.copy()
+            np.testing.assert_array_equal(targets.feet_in_body, held)
     assert controller.state is GaitState.FROZEN
     assert "out of reach" in controller.frozen_reason
     assert any(name in controller.frozen_reason for name in default_spec.leg_names)
     # The held targets are a pose the legs can actually take.
-    controller.kinematics.check_limits(held)
+    controller.kinematics.check_limits(controller.kinematics.inverse_in_body(held))
 
 
 def test_speed_above_the_gait_maximum_is_capped(default_spec):
@@ -125,7 +126,7 @@ def test_speed_above_the_gait_maximum_is_capped(default_spec):
 def test_a_swing_past_the_coxa_range_is_turned_back(default_spec, overshoot_deg):
     """A swinging foot asked to go beyond its coxa's range (the body lagging behind the
     plan) is brought back to the edge of the range, at the same reach, not refused."""
-    from footfall.motion.kinematics import LegKinematics
+    from footfall.robot.kinematics import LegKinematics
 
     controller = WalkController(default_spec)
     controller.swinging[0] = True
@@ -137,7 +138,7 @@ def test_a_swing_past_the_coxa_range_is_turned_back(default_spec, overshoot_deg)
     feet = rest.copy()
     feet[0] = kin.leg_to_body(in_leg)[0]
     assert not kin.reachable(0, feet[0])
-    fixed = controller._within_reach(feet)
+    fixed = controller.solver.within_reach(feet, controller.swinging)
     assert kin.reachable(0, fixed[0])
     back_in_leg = kin.body_to_leg(fixed)[0]
     assert np.degrees(np.arctan2(back_in_leg[1], back_in_leg[0])) == pytest.approx(

@@ -2,13 +2,15 @@
 
 The public API, re-exported from the modules that hold it. Data flows one way: sensing
 (camera, poses) -> mapping (height map) -> scoring -> planning (footholds) -> motion
-(kinematics, gaits, swing paths, the walking controller) -> backend (the MuJoCo
-simulation, or a real robot's driver). The biped planner (``footfall.biped``) goes from
-point clouds to obstacles, paths, footsteps and the centre-of-mass pattern.
+(gaits, swing paths, the walking controller) -> backends (the MuJoCo simulation, a
+mock, or a real robot's driver). The parts run as nodes (``footfall.nodes``) that exchange
+messages (``footfall.messages``) over a bus (``footfall.runtime``). The biped planner
+(``footfall.biped``) goes from point clouds to obstacles, paths, footsteps and the
+centre-of-mass pattern.
 """
 
-from footfall.backend import HexapodBackend as HexapodBackend
-from footfall.backend import RobotState as RobotState
+from footfall.backends import HexapodBackend as HexapodBackend
+from footfall.backends.mock import MockHexapod as MockHexapod
 from footfall.biped.lipm import LipmConfig as LipmConfig
 from footfall.biped.lipm import WalkParameter as WalkParameter
 from footfall.biped.lipm import lipm_pattern as lipm_pattern
@@ -28,25 +30,34 @@ from footfall.errors import SingularConfigurationError as SingularConfigurationE
 from footfall.errors import UnreachableTargetError as UnreachableTargetError
 from footfall.mapping.height_map import HeightMap as HeightMap
 from footfall.mapping.height_map import HeightMapConfig as HeightMapConfig
+from footfall.messages import EffectorTargets as EffectorTargets
+from footfall.messages import GaitState as GaitState
+from footfall.messages import GaitStatus as GaitStatus
+from footfall.messages import JointTargets as JointTargets
+from footfall.messages import MapUpdate as MapUpdate
+from footfall.messages import Mode as Mode
+from footfall.messages import RobotState as RobotState
+from footfall.messages import WalkCommand as WalkCommand
 from footfall.metrics import walk_metrics as walk_metrics
 from footfall.motion.gait import GaitConfig as GaitConfig
 from footfall.motion.gait import GaitKind as GaitKind
-from footfall.motion.gait import WalkCommand as WalkCommand
-from footfall.motion.kinematics import LegKinematics as LegKinematics
-from footfall.motion.planar import PlanarPose as PlanarPose
 from footfall.motion.swing import FlowConfig as FlowConfig
 from footfall.motion.swing import FlowSwing as FlowSwing
 from footfall.motion.swing import PolynomialArcSwing as PolynomialArcSwing
 from footfall.motion.swing import SwingTrajectory as SwingTrajectory
-from footfall.motion.walker import GaitState as GaitState
-from footfall.motion.walker import JointTargets as JointTargets
 from footfall.motion.walker import WalkController as WalkController
+from footfall.nodes.mapping import MappingNode as MappingNode
+from footfall.nodes.movement import MovementNode as MovementNode
+from footfall.nodes.servo import ServoNode as ServoNode
 from footfall.planning.footholds import FootholdConfig as FootholdConfig
 from footfall.planning.footholds import FootholdSearch as FootholdSearch
 from footfall.planning.terrain_planner import TerrainPlanner as TerrainPlanner
 from footfall.planning.terrain_planner import TerrainPlannerConfig as TerrainPlannerConfig
+from footfall.robot.kinematics import LegKinematics as LegKinematics
+from footfall.robot.planar import PlanarPose as PlanarPose
 from footfall.robot.spec import HexapodSpec as HexapodSpec
 from footfall.robot.spec import load_spec as load_spec
+from footfall.runtime.bus import InProcessBus as InProcessBus
 from footfall.scoring.walkability import ScoreConfig as ScoreConfig
 from footfall.scoring.walkability import score_map as score_map
 from footfall.sensing.camera import PinholeCamera as PinholeCamera
@@ -58,6 +69,7 @@ __all__ = [
     "ConfigError",
     "DatasetError",
     "DepthImageError",
+    "EffectorTargets",
     "FlowConfig",
     "FlowSwing",
     "FootfallError",
@@ -66,14 +78,21 @@ __all__ = [
     "GaitConfig",
     "GaitKind",
     "GaitState",
+    "GaitStatus",
     "HeightMap",
     "HeightMapConfig",
     "HexapodBackend",
     "HexapodSpec",
+    "InProcessBus",
     "InvalidPoseError",
     "JointTargets",
     "LegKinematics",
     "LipmConfig",
+    "MapUpdate",
+    "MappingNode",
+    "MockHexapod",
+    "Mode",
+    "MovementNode",
     "PinholeCamera",
     "PlanMap",
     "PlanarPose",
@@ -82,6 +101,7 @@ __all__ = [
     "Pose",
     "RobotState",
     "ScoreConfig",
+    "ServoNode",
     "SingularConfigurationError",
     "SwingTrajectory",
     "TerrainPlanner",

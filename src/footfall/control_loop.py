@@ -1,8 +1,12 @@
-"""The fixed-rate control loop: read the robot, update the controller, send joint targets.
+"""The fixed-rate control loop: the movement and servo nodes driving a robot, and its log.
 
-It runs against any :class:`~footfall.backend.HexapodBackend`, so the same loop drives
-the MuJoCo simulation and a real robot's servo driver; it records what happened in a
-:class:`WalkLog` for metrics and plots.
+:func:`run_control_loop` wires a graph on a bus: a command source, the movement node (the
+walking controller) and the servo node (inverse kinematics and the backend), and runs it at
+a fixed rate. Each tick the command goes out, the movement node publishes effector targets,
+the servo node turns them into joint targets for the backend, the backend advances one
+period and the servo node publishes the new state. Any
+:class:`~footfall.backends.HexapodBackend` works: MuJoCo, the mock, a real robot's driver.
+A :class:`WalkRecorder` keeps the per-tick record for metrics and plots.
 """
 
 from __future__ import annotations
@@ -13,9 +17,20 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from footfall.backend import HexapodBackend
-from footfall.motion.gait import WalkCommand
+from footfall.backends import HexapodBackend
+from footfall.messages import (
+    EffectorTargets,
+    GaitStatus,
+    Mode,
+    ModeCommand,
+    RobotState,
+    WalkCommand,
+)
 from footfall.motion.walker import WalkController
+from footfall.nodes.movement import MovementNode
+from footfall.nodes.servo import ServoNode
+from footfall.runtime.bus import Bus, InProcessBus
+from footfall.runtime.scheduler import SimulatedScheduler
 
 
 @dataclass
@@ -58,44 +73,49 @@ class WalkLog:
         return np.asarray(getattr(self, name))
 
 
-def run_control_loop(
-    backend: HexapodBackend,
-    controller: WalkController,
-    command: WalkCommand | Callable[[float], WalkCommand],
-    seconds: float,
-    control_rate_hz: float = 100.0,
-    on_tick: Callable[[float], None] | None = None,
-    stop: Callable[[WalkLog], bool] | None = None,
-) -> WalkLog:
-    """Drive ``backend`` with ``controller`` for ``seconds`` at a fixed rate.
+class WalkRecorder:
+    """Keeps a :class:`WalkLog` from the messages of a walking graph.
 
     Args:
-        backend: The robot (simulated or real).
-        controller: The walking controller.
-        command: A fixed command, or a function of controller time returning one.
-        seconds: Duration [s].
-        control_rate_hz: Control rate [Hz].
-        on_tick: Called with the controller time after every tick (sensing, progress).
-        stop: Ends the loop early when it returns True for the log so far.
-
-    Returns:
-        The record of the run.
+        bus: The bus.
     """
-    dt = 1.0 / control_rate_hz
-    log = WalkLog()
-    unknown3 = np.full(3, np.nan)
-    state = backend.read()
-    for k in range(round(seconds * control_rate_hz)):
-        t = k * dt
-        current = command(t) if callable(command) else command
-        targets = controller.update(t, current, state)
-        backend.command(targets)
-        backend.advance(dt)
-        state = backend.read()
+
+    def __init__(self, bus: Bus) -> None:
+        self.log = WalkLog()
+        self._state: RobotState | None = None
+        self._targets: EffectorTargets | None = None
+        self._status: GaitStatus | None = None
+        self._body_height = float("nan")
+        bus.subscribe(RobotState.TOPIC, self._on_state)
+        bus.subscribe(EffectorTargets.TOPIC, self._on_targets)
+        bus.subscribe(GaitStatus.TOPIC, self._on_status)
+        bus.subscribe(WalkCommand.TOPIC, self._on_command)
+
+    def _on_state(self, message: RobotState) -> None:
+        self._state = message
+
+    def _on_targets(self, message: EffectorTargets) -> None:
+        self._targets = message
+
+    def _on_status(self, message: GaitStatus) -> None:
+        self._status = message
+
+    def _on_command(self, message: WalkCommand) -> None:
+        self._body_height = message.body_height
+
+    def record(self, t: float) -> bool:
+        """Add a row at time ``t`` [s] when new effector targets went out; True if it did."""
+        state, targets, status = self._state, self._targets, self._status
+        if state is None or targets is None or status is None:
+            return False
+        self._targets = None
+        log = self.log
         roll, pitch = state.roll_pitch
-        log.time.append(t + dt)
+        log.time.append(t)
         log.body_position_in_world.append(
-            state.position_body_in_world if state.position_body_in_world is not None else unknown3
+            state.position_body_in_world
+            if state.position_body_in_world is not None
+            else np.full(3, np.nan)
         )
         log.roll.append(roll)
         log.pitch.append(pitch)
@@ -103,8 +123,8 @@ def run_control_loop(
         log.feet_in_world.append(
             state.feet_in_world if state.feet_in_world is not None else np.full((6, 3), np.nan)
         )
-        log.feet_commanded_in_world.append(controller.feet_commanded_in_world)
-        log.swinging.append(controller.swinging.copy())
+        log.feet_commanded_in_world.append(targets.feet_in_world)
+        log.swinging.append(targets.swinging)
         log.contact.append(
             state.feet_in_contact if state.feet_in_contact is not None else np.zeros(6, dtype=bool)
         )
@@ -113,11 +133,92 @@ def run_control_loop(
             if state.foot_orientations_in_world is not None
             else np.full((6, 3, 3), np.nan)
         )
-        log.commanded_height.append(current.body_height)
-        log.reference_body_z.append(controller.height)
-        log.state.append(controller.state.value)
+        log.commanded_height.append(self._body_height)
+        log.reference_body_z.append(status.body_z)
+        log.state.append(status.state.value)
+        return True
+
+
+@dataclass
+class WalkingGraph:
+    """The nodes that walk a robot, on one bus.
+
+    Attributes:
+        bus: The bus.
+        backend: The robot.
+        movement: The movement node.
+        servo: The servo node.
+        recorder: The per-tick record.
+    """
+
+    bus: Bus
+    backend: HexapodBackend
+    movement: MovementNode
+    servo: ServoNode
+    recorder: WalkRecorder
+
+    @classmethod
+    def build(
+        cls,
+        bus: Bus,
+        backend: HexapodBackend,
+        controller: WalkController,
+        command_timeout: float | None = None,
+    ) -> WalkingGraph:
+        """Wire the movement and servo nodes and a recorder on ``bus``."""
+        recorder = WalkRecorder(bus)
+        movement = MovementNode(bus, controller, command_timeout=command_timeout)
+        servo = ServoNode(bus, controller.spec, backend)
+        servo.publish_state()
+        return cls(bus, backend, movement, servo, recorder)
+
+    def step(self, t: float, dt: float) -> None:
+        """One control tick at ``t``, then the robot advances ``dt`` [s] and reports."""
+        self.movement.tick(t)
+        self.backend.advance(dt)
+        self.servo.publish_state()
+        self.recorder.record(t + dt)
+
+
+def run_control_loop(
+    backend: HexapodBackend,
+    controller: WalkController,
+    command: WalkCommand | Callable[[float], WalkCommand],
+    seconds: float,
+    control_rate_hz: float = 100.0,
+    on_tick: Callable[[float], None] | None = None,
+    stop: Callable[[WalkLog], bool] | None = None,
+    bus: Bus | None = None,
+) -> WalkLog:
+    """Drive ``backend`` with ``controller`` for ``seconds`` at a fixed rate, in walking mode.
+
+    Args:
+        backend: The robot (simulated, mocked or real).
+        controller: The walking controller.
+        command: A fixed command, or a function of controller time returning one; published
+            on the bus every tick.
+        seconds: Duration [s].
+        control_rate_hz: Control rate [Hz].
+        on_tick: Called with the controller time after every tick (sensing, progress).
+        stop: Ends the loop early when it returns True for the log so far.
+        bus: The bus to wire the nodes on; a new in-process bus by default.
+
+    Returns:
+        The record of the run.
+    """
+    bus = bus if bus is not None else InProcessBus()
+    graph = WalkingGraph.build(bus, backend, controller)
+    bus.publish(ModeCommand.TOPIC, ModeCommand(Mode.WALKING))
+    scheduler = SimulatedScheduler(control_rate_hz)
+    dt = scheduler.period
+
+    def tick(t: float) -> bool:
+        current = command(t) if callable(command) else command
+        bus.publish(WalkCommand.TOPIC, current)
+        graph.step(t, dt)
         if on_tick is not None:
             on_tick(t + dt)
-        if stop is not None and stop(log):
-            break
-    return log
+        return stop is not None and stop(graph.recorder.log)
+
+    scheduler.run(tick, seconds)
+    return graph.recorder.log

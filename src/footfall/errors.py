@@ -44,3 +44,7 @@ class DatasetError(FootfallError, ValueError):
 
 class PlanningError(FootfallError, ValueError):
     """A path cannot be planned: the start or goal lies in an obstacle, or no path exists."""
+
+
+class MessageError(FootfallError, ValueError):
+    """Bytes that do not decode to the message expected: truncated, corrupt, another version."""

@@ -233,7 +233,7 @@ def plot_footholds(
     """Every touchdown over a score map, like thesis Fig. 6.8: nominal red, chosen green.
 
     Args:
-        touchdowns: Records with ``nominal`` and ``chosen`` world positions.
+        touchdowns: :class:`~footfall.messages.Touchdown` records.
         score: Score map, shape (N, N); NaN unknown.
         valid: Validity, shape (N, N).
         origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
@@ -248,8 +248,8 @@ def plot_footholds(
     _grid(ax, score, extent, cmap="gray", vmin=0.0, vmax=1.0)
     _invalid_overlay(ax, score, valid, extent, 0.35)
     if touchdowns:
-        nominal = np.array([t.nominal[:2] for t in touchdowns])
-        chosen = np.array([t.chosen[:2] for t in touchdowns])
+        nominal = np.array([t.nominal_in_world[:2] for t in touchdowns])
+        chosen = np.array([t.chosen_in_world[:2] for t in touchdowns])
         for a, b in zip(nominal, chosen, strict=True):
             if np.hypot(*(a - b)) > 1e-3:
                 ax.plot([a[0], b[0]], [a[1], b[1]], color="yellow", lw=0.8)

@@ -1,4 +1,4 @@
-"""Depth sequences in the TUM RGB-D layout, and mapping them with the same height map.
+"""Depth sequences in the TUM RGB-D layout, mapped by the same mapping node as a walk.
 
 A sequence folder holds::
 
@@ -13,8 +13,6 @@ that axis becomes +z of the map frame.
 
 from __future__ import annotations
 
-import statistics
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,8 +22,11 @@ from PIL import Image
 from scipy.spatial.transform import Rotation
 
 from footfall.errors import DatasetError
-from footfall.mapping.height_map import HeightMap, HeightMapConfig, MapSnapshot
-from footfall.scoring.walkability import ScoreConfig, ScoreMap, score_map
+from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
+from footfall.messages import DepthFrame, PoseEstimate
+from footfall.nodes.mapping import MappingNode
+from footfall.runtime.bus import InProcessBus
+from footfall.scoring.walkability import ScoreConfig, ScoreMap
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
 
@@ -33,7 +34,7 @@ TUM_DEPTH_SCALE = 1.0 / 5000.0  # metres per depth unit
 
 
 @dataclass(frozen=True)
-class DepthFrame:
+class SequenceFrame:
     """One depth image of a sequence and the camera pose it was taken from.
 
     Attributes:
@@ -68,7 +69,7 @@ def _read_table(path: Path, columns: int) -> list[list[str]]:
 
 def read_tum_sequence(
     folder: str | Path, max_time_difference: float = 0.02
-) -> tuple[list[DepthFrame], int]:
+) -> tuple[list[SequenceFrame], int]:
     """Depth frames of a TUM-layout sequence, each with its nearest-in-time pose.
 
     Args:
@@ -106,7 +107,7 @@ def read_tum_sequence(
             continue
         p = pose_table[best]
         frames.append(
-            DepthFrame(
+            SequenceFrame(
                 t, root / row[1], Pose.from_quaternion(p[1:4], p[4:8]), float(times[best] - t)
             )
         )
@@ -211,29 +212,36 @@ def map_tum_sequence(
         raise DatasetError(f"{folder}: no depth frame has a pose within tolerance")
     align = Pose(np.zeros(3), up_to_z(up))
     poses = [align.compose(f.camera_pose) for f in frames]
-    height_map = HeightMap(map_config, centre=tuple(poses[0].position[:2]))
-    update_ms = []
-    dropped = outside = 0
-    for frame, pose in zip(frames, poses, strict=True):
+    bus = InProcessBus()
+    start = poses[0].position
+    mapping = MappingNode(
+        bus,
+        map_config,
+        score_config,
+        publish_every_frame=False,
+        centre=(float(start[0]), float(start[1])),
+        stride=stride,
+    )
+    camera_in_body = Pose(np.zeros(3), Rotation.identity())  # the camera is the body
+    for number, (frame, pose) in enumerate(zip(frames, poses, strict=True), start=1):
         depth = load_depth_png(frame.depth_path)
-        t0 = time.perf_counter()
-        height_map.recentre((float(pose.position[0]), float(pose.position[1])))
-        stats = height_map.integrate_depth(
-            depth, camera, pose, depth_scale=depth_scale, stride=stride
+        bus.publish(PoseEstimate.TOPIC, PoseEstimate(frame.timestamp, pose, pose))
+        bus.publish(
+            DepthFrame.TOPIC,
+            DepthFrame(frame.timestamp, depth, camera, camera_in_body, depth_scale, number),
         )
-        update_ms.append(1e3 * (time.perf_counter() - t0))
-        dropped += stats.depth.dropped
-        outside += stats.outside
-    snapshot = height_map.snapshot()
-    scores = score_map(snapshot, score_config)
+    mapping.publish(frames[-1].timestamp)
+    snapshot = mapping.height_map.snapshot()
+    scores = mapping.scores
+    assert scores is not None
     path = np.array([p.position[:2] for p in poses])
     metrics: dict[str, object] = {
-        "frames": len(frames),
-        "frames_skipped_no_pose": skipped,
-        "map_update_ms_median": statistics.median(update_ms),
+        "frames": mapping.frames,
+        "frames_skipped_no_pose": skipped + mapping.frames_skipped_no_pose,
+        **mapping.timing(),
         "cells_known": int(snapshot.known.sum()),
-        "pixels_dropped": dropped,
-        "points_outside_map": outside,
+        "pixels_dropped": mapping.pixels_dropped,
+        "points_outside_map": mapping.points_outside,
         **floor_flatness(snapshot),
     }
     return SequenceMap(snapshot, scores, path, metrics)

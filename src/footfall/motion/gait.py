@@ -97,44 +97,6 @@ def tripod_swing_set(
 
 
 @dataclass(frozen=True)
-class WalkCommand:
-    """An operator's command (thesis Appendix B, ``HexapodCommands``), with a yaw rate added.
-
-    Attributes:
-        direction: Walk direction in the body frame, ``(x, y)``; normalised on use.
-        speed: Body speed along the direction [m/s].
-        body_height: Body height above the ground [m].
-        yaw_rate: Turning rate about the body z axis [rad/s].
-    """
-
-    direction: tuple[float, float] = (1.0, 0.0)
-    speed: float = 0.0
-    body_height: float = 0.09
-    yaw_rate: float = 0.0
-
-    def __post_init__(self) -> None:
-        values = (*self.direction, self.speed, self.body_height, self.yaw_rate)
-        if not all(math.isfinite(v) for v in values):
-            raise ConfigError(f"walk command holds a non-finite value: {self}")
-        if self.speed < 0:
-            raise ConfigError(
-                f"walk speed must be >= 0 (use the direction to reverse), got {self.speed}"
-            )
-        if self.body_height <= 0:
-            raise ConfigError(f"body height must be positive, got {self.body_height}")
-        if self.speed > 0 and math.hypot(*self.direction) < 1e-9:
-            raise ConfigError("a walk direction of zero length cannot carry a speed")
-
-    @property
-    def velocity_in_body(self) -> tuple[float, float]:
-        """Commanded body velocity ``(vx, vy)`` [m/s]."""
-        norm = math.hypot(*self.direction)
-        if self.speed == 0.0 or norm == 0.0:
-            return (0.0, 0.0)
-        return (self.speed * self.direction[0] / norm, self.speed * self.direction[1] / norm)
-
-
-@dataclass(frozen=True)
 class GaitConfig:
     """Walking parameters. Defaults are the thesis' (§8.1): stride 0.15 m, Ch 2.0, q 14.
 

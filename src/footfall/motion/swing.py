@@ -16,6 +16,10 @@ scaled by ``length_unit`` before the field is evaluated.
 Because the field depends only on where the foot is, re-targeting mid-swing integrates it
 again from the foot's current point: a foot already above the new target does not rise a
 second time (Figs. 5.18-5.19), unlike a polynomial restarted from the ground (Fig. 5.12).
+
+Both trajectories, the flow field they integrate and the helpers that lift a path over the
+mapped terrain and cap it under the leg's reach are kept in one module: they share the
+polyline sampling and re-targeting, and are read together against §5.4.
 """
 
 from __future__ import annotations

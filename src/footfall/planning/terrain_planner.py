@@ -16,9 +16,9 @@ import numpy.typing as npt
 
 from footfall.errors import ConfigError
 from footfall.mapping.height_map import MapSnapshot
-from footfall.motion.kinematics import LegKinematics
-from footfall.motion.planar import PlanarPose
 from footfall.planning.footholds import FootholdConfig, FootholdSearch, point_in_polygon_margin
+from footfall.robot.kinematics import LegKinematics
+from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 from footfall.scoring.walkability import ScoreMap
 
@@ -67,6 +67,22 @@ class StepPoses:
     touchdown: PlanarPose
     liftoff: PlanarPose
     stable: tuple[PlanarPose, ...]
+
+
+@dataclass(frozen=True)
+class NoFoothold:
+    """Why a step has no footholds.
+
+    Attributes:
+        reason: What failed, naming the leg where one leg failed.
+        leg: That leg's name, or "" when the reason concerns no single leg.
+    """
+
+    reason: str
+    leg: str = ""
+
+    def __str__(self) -> str:
+        return self.reason
 
 
 @dataclass(frozen=True)
@@ -143,7 +159,7 @@ class TerrainPlanner:
         feet: npt.NDArray[np.float64],
         poses: StepPoses,
         body_z: npt.ArrayLike,
-    ) -> FootholdPlan | str:
+    ) -> FootholdPlan | NoFoothold:
         """Move each swinging leg's nominal foothold to the nearest acceptable cell.
 
         The body height is planned with the footholds: a foothold is reachable when the leg
@@ -161,20 +177,22 @@ class TerrainPlanner:
                 touchdown.
 
         Returns:
-            The plan, or the reason there is none (naming the leg).
+            The plan, or why there is none (naming the leg).
         """
         if self.scores is None or self.snapshot is None or self._search is None:
-            return "no map yet: the camera has not seen the ground ahead"
+            return NoFoothold("no map yet: the camera has not seen the ground ahead")
         c = self.config
         r = self.spec.foot_radius
         heights = np.sort(np.atleast_1d(np.asarray(body_z, dtype=np.float64)))
         feasible = self._stance_heights(feet, ~swinging, poses, heights)
         if not feasible.any():
-            return "the supporting feet are out of reach at every body height the body can take"
+            return NoFoothold(
+                "the supporting feet are out of reach at every body height the body can take"
+            )
         lowest = self.lowest_body_z((poses.now, poses.touchdown), c.min_body_clearance)
         feasible &= heights >= lowest
         if not feasible.any():
-            return (
+            return NoFoothold(
                 f"the body cannot keep {c.min_body_clearance:.2f} m above the terrain under it "
                 f"(it would have to be at {lowest:.3f} m) with every foot in reach"
             )
@@ -210,10 +228,11 @@ class TerrainPlanner:
                 nominal[leg, :2], self.scores, self.snapshot.heights, accept
             )
             if foothold is None:
-                return (
+                return NoFoothold(
                     f"leg {self.spec.leg_names[leg]}: no valid, reachable and stable cell "
                     f"within {c.footholds.search_radius:.2f} m of its nominal foothold "
-                    f"({nominal[leg, 0]:.2f}, {nominal[leg, 1]:.2f}) m"
+                    f"({nominal[leg, 0]:.2f}, {nominal[leg, 1]:.2f}) m",
+                    self.spec.leg_names[leg],
                 )
             targets[leg] = foothold.position + [0.0, 0.0, r]
             feasible = feasible & reached_at(targets[leg])

@@ -6,9 +6,8 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from footfall.backend import RobotState
-from footfall.motion.kinematics import LegKinematics
-from footfall.motion.walker import JointTargets
+from footfall.messages import JointTargets, RobotState
+from footfall.robot.kinematics import LegKinematics
 from footfall.robot.spec import HexapodSpec
 from footfall.sim.model import CameraMount, hexapod_mjcf, joint_names
 from footfall.sim.terrain import Flat, Terrain
@@ -23,6 +22,8 @@ class MujocoHexapod:
         camera: A depth camera on the body (see :class:`footfall.sim.camera.SimDepthCamera`).
         body_height: Initial body height above the ground [m]; the spec's by default.
     """
+
+    realtime = False
 
     def __init__(
         self,
@@ -62,6 +63,9 @@ class MujocoHexapod:
         self.data.qpos[self._qpos_index] = angles.ravel()
         self.data.ctrl[:] = angles.ravel()
         mujoco.mj_forward(self.model, self.data)
+        self._servo_gains = self.model.actuator_gainprm[:, 0].copy()
+        self._servo_bias = self.model.actuator_biasprm[:, 1:3].copy()
+        self.torque = True
 
     @property
     def timestep(self) -> float:
@@ -91,6 +95,13 @@ class MujocoHexapod:
         """Set the servo targets; the rate feed-forward cancels the servo damping's lag."""
         ctrl = targets.positions + self._feedforward_gain * targets.velocities
         self.data.ctrl[:] = ctrl.ravel()
+
+    def set_torque(self, enabled: bool) -> None:
+        """Servos on (position control) or off: zero actuator force, the legs go limp."""
+        self.torque = bool(enabled)
+        on = 1.0 if self.torque else 0.0
+        self.model.actuator_gainprm[:, 0] = on * self._servo_gains
+        self.model.actuator_biasprm[:, 1:3] = on * self._servo_bias
 
     def advance(self, duration: float) -> None:
         """Step the physics for ``duration`` seconds (rounded to whole time steps)."""

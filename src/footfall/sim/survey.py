@@ -13,15 +13,18 @@ import numpy.typing as npt
 from footfall.control_loop import run_control_loop
 from footfall.errors import ConfigError
 from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
-from footfall.motion.gait import GaitConfig, WalkCommand
-from footfall.motion.planar import PlanarPose
+from footfall.messages import WalkCommand
+from footfall.motion.gait import GaitConfig
 from footfall.motion.walker import WalkController
+from footfall.nodes.mapping import MappingNode
+from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
+from footfall.runtime.bus import InProcessBus
 from footfall.scoring.walkability import ScoreConfig, ScoreMap, score_map
 from footfall.sensing.pose import SlamNoise, SlamNoiseConfig
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import CameraMount
-from footfall.sim.perception import SimPerception
+from footfall.sim.sensors import SimCameraNode, SimPoseNode, true_body_pose
 from footfall.sim.terrain import Terrain, make_terrain
 
 NOISE_MODELS = ("none", "slam")
@@ -174,7 +177,13 @@ def simulate_mapping(
     backend = MujocoHexapod(spec, terrain, settings.camera)
     backend.advance(0.3)
     noise = SlamNoise(settings.slam, rng) if settings.noise == "slam" else None
-    perception = SimPerception(backend, settings.camera, settings.map, settings.score, noise)
+    bus = InProcessBus()
+    body = true_body_pose(backend).position
+    mapping = MappingNode(
+        bus, settings.map, settings.score, publish_every_frame=False, centre=(body[0], body[1])
+    )
+    camera = SimCameraNode(bus, backend, settings.camera)
+    SimPoseNode(bus, camera, noise)
     controller = WalkController(
         spec, GaitConfig(kind="tripod"), initial_pose=PlanarPose(*terrain.start)
     )
@@ -183,11 +192,11 @@ def simulate_mapping(
     def sense(t: float) -> None:
         if on_tick is not None:
             on_tick(t)
-        perception.maybe_update(t)
+        camera.tick(t)
 
-    log = run_control_loop(backend, controller, command, settings.seconds, on_tick=sense)
-    perception.close()
-    snapshot = perception.height_map.snapshot()
+    log = run_control_loop(backend, controller, command, settings.seconds, on_tick=sense, bus=bus)
+    camera.close()
+    snapshot = mapping.height_map.snapshot()
     t0 = time.perf_counter()
     scores = score_map(snapshot, settings.score)
     score_ms = 1e3 * (time.perf_counter() - t0)
@@ -195,11 +204,12 @@ def simulate_mapping(
     metrics: dict[str, object] = {
         **map_accuracy(terrain, snapshot),
         "coverage": path_coverage(snapshot, path),
-        "frames": perception.frames,
-        **perception.timing(),
+        "frames": mapping.frames,
+        **mapping.timing(),
+        **camera.timing(),
         "score_ms": score_ms,
-        "pixels_dropped": perception.pixels_dropped,
-        "points_outside_map": perception.points_outside,
+        "pixels_dropped": mapping.pixels_dropped,
+        "points_outside_map": mapping.points_outside,
         "valid_fraction_of_known": float(scores.valid[snapshot.known].mean())
         if snapshot.known.any()
         else 0.0,

@@ -1,8 +1,7 @@
-"""A simulated walk: robot, terrain, perception, controller and control loop put together."""
+"""A simulated walk: the nodes of the robot, its camera and its task on the MuJoCo backend."""
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -10,26 +9,30 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from footfall.control_loop import WalkLog, run_control_loop
+from footfall.control_loop import WalkingGraph, WalkLog
 from footfall.errors import ConfigError
 from footfall.mapping.height_map import HeightMapConfig
-from footfall.metrics import fallen, walk_metrics
-from footfall.motion.gait import GaitConfig, WalkCommand
-from footfall.motion.planar import PlanarPose
-from footfall.motion.walker import FeedbackConfig, GaitState, TouchdownRecord, WalkController
+from footfall.messages import GaitState, GroundPrior, Touchdown, WalkCommand
+from footfall.metrics import walk_metrics
+from footfall.motion.feedback import FeedbackConfig
+from footfall.motion.gait import GaitConfig
+from footfall.motion.walker import WalkController
+from footfall.nodes.mapping import MappingNode
 from footfall.planning.terrain_planner import TerrainPlanner, TerrainPlannerConfig
+from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
+from footfall.runtime.bus import Bus, InProcessBus
+from footfall.runtime.scheduler import SimulatedScheduler
 from footfall.scoring.walkability import ScoreConfig, ScoreMap, edge_cells, score_heights
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import CameraMount
-from footfall.sim.perception import SimPerception
+from footfall.sim.sensors import SimCameraNode, SimPoseNode
+from footfall.sim.task import TerrainTask
 from footfall.sim.terrain import TERRAIN_NAMES, Terrain, make_terrain
 
 TERRAINS = TERRAIN_NAMES
-# The goal counts as reached when the body is this close to it, or past it [m].
-GOAL_TOLERANCE = 0.1
-# A robot frozen this long with nothing changing ends the run [s].
-FROZEN_TIMEOUT = 3.0
+# The ground around the standing robot is known from its feet within this radius [m].
+START_PRIOR_RADIUS = 0.6
 
 
 @dataclass(frozen=True)
@@ -98,7 +101,7 @@ class WalkResult:
     metrics: dict[str, object]
     warnings: dict[str, int]
     terrain: Terrain
-    touchdowns: list[TouchdownRecord]
+    touchdowns: list[Touchdown]
     scores: ScoreMap | None
 
 
@@ -207,142 +210,100 @@ def foothold_metrics(
     }
 
 
-def _seed_start_area(
-    perception: SimPerception, backend: MujocoHexapod, radius: float = 0.6
-) -> None:
-    """Mark the ground around the robot's start as known, at its feet's height.
-
-    The camera looks ahead and never sees under or beside the robot, where its first steps
-    land; the robot stands there, so the plane through its feet is taken as the ground
-    within ``radius`` (a proprioceptive prior). Cells the camera sees replace it.
-    """
-    state = backend.read()
-    assert state.feet_in_world is not None and state.position_body_in_world is not None
-    ground = float(np.mean(state.feet_in_world[:, 2])) - backend.spec.foot_radius
-    res = perception.height_map.config.resolution
-    offsets = np.arange(-radius, radius + res, res)
-    gx, gy = np.meshgrid(offsets, offsets)
-    inside = np.hypot(gx, gy) <= radius
-    xy = state.position_body_in_world[:2] + np.stack([gx[inside], gy[inside]], axis=1)
-    points = np.column_stack([xy, np.full(len(xy), ground)])
-    perception.height_map.integrate_points(points, state.position_body_in_world)
-
-
 def simulate_walk(
     spec: HexapodSpec,
     settings: WalkSettings,
     on_tick: Callable[[float], None] | None = None,
     terrain: Terrain | None = None,
+    bus: Bus | None = None,
 ) -> WalkResult:
     """Walk the robot across a terrain in MuJoCo, towards the terrain's goal.
+
+    The run is a graph of nodes on one bus: the simulated camera and pose source, the
+    mapping node, the movement and servo nodes on the MuJoCo backend, and the task that
+    steers to the goal and ends the run.
 
     Args:
         spec: The robot.
         settings: What to simulate.
         on_tick: Progress callback, called with the walk time [s] after each control tick.
         terrain: A terrain object to use instead of ``settings.terrain`` (custom terrains).
+        bus: The bus to run the nodes on; a new in-process bus by default.
 
     Returns:
         The record, metrics and simulator warnings.
     """
     terrain = terrain or make_terrain(settings.terrain, seed=settings.seed)
-    camera = None if settings.blind else settings.camera
-    backend = MujocoHexapod(spec, terrain, camera, body_height=settings.command.body_height)
+    camera_mount = None if settings.blind else settings.camera
+    backend = MujocoHexapod(spec, terrain, camera_mount, body_height=settings.command.body_height)
     backend.advance(settings.settle_seconds)
-    planner = None if settings.blind else TerrainPlanner(spec, settings.planner)
-    perception = None
+    bus = bus if bus is not None else InProcessBus()
+    base = settings.command
+    planner = None
+    camera = mapping = None
     if not settings.blind:
-        perception = SimPerception(
-            backend, settings.camera, settings.map, settings.score, None, planner
-        )
-        _seed_start_area(perception, backend)
-        perception.maybe_update(0.0)
+        planner = TerrainPlanner(spec, settings.planner)
+        standing = backend.read()
+        assert standing.position_body_in_world is not None and standing.feet_in_world is not None
+        body = standing.position_body_in_world
+        mapping = MappingNode(bus, settings.map, settings.score, centre=(body[0], body[1]))
+        camera = SimCameraNode(bus, backend, settings.camera)
+        SimPoseNode(bus, camera)
+        ground = float(np.mean(standing.feet_in_world[:, 2])) - spec.foot_radius
+        bus.publish(GroundPrior.TOPIC, GroundPrior(0.0, body, ground, START_PRIOR_RADIUS))
+        camera.tick(0.0)
     controller = WalkController(
         spec,
         settings.gait,
         initial_pose=PlanarPose(*terrain.start),
-        initial_height=settings.command.body_height,
+        initial_height=base.body_height,
         planner=planner,
         feedback=None if settings.blind else settings.feedback,
     )
-    goal = np.asarray(terrain.goal, dtype=np.float64)
-    start = np.asarray(terrain.start, dtype=np.float64)
-    route = (goal - start) / np.linalg.norm(goal - start)
-    base = settings.command
+    task = TerrainTask(bus, terrain, base, settings.stop_at_goal)
+    graph = WalkingGraph.build(bus, backend, controller)
+    task.begin()
+    scheduler = SimulatedScheduler(settings.control_rate_hz)
+    dt = scheduler.period
 
-    def progress(xy: npt.NDArray[np.float64]) -> float:
-        return float((xy - start) @ route)
-
-    def command(t: float) -> WalkCommand:
-        pose = controller.pose
-        here = np.array([pose.x, pose.y])
-        if progress(here) >= progress(goal) - GOAL_TOLERANCE:
-            return WalkCommand(speed=0.0, body_height=base.body_height)
-        # Steer along the start -> goal line: aim a little ahead on it.
-        aim = start + route * (progress(here) + 0.5)
-        heading = math.atan2(aim[1] - here[1], aim[0] - here[0])
-        error = math.atan2(math.sin(heading - pose.yaw), math.cos(heading - pose.yaw))
-        return WalkCommand(
-            speed=base.speed,
-            body_height=base.body_height,
-            yaw_rate=float(np.clip(error, -0.3, 0.3)),
-        )
-
-    frozen_since: list[float] = []
-
-    def tick(t: float) -> None:
-        if perception is not None and perception.maybe_update(t):
-            controller.correct_pose(perception.planar_body_estimate())
+    def tick(t: float) -> bool:
+        task.command(t)
+        graph.step(t, dt)
+        if camera is not None:
+            camera.tick(t + dt)
         if on_tick is not None:
-            on_tick(t)
-
-    def stop(log: WalkLog) -> bool:
-        body = log.body_position_in_world[-1]
-        ground = float(terrain.height(body[0], body[1]))
-        if fallen(
-            math.degrees(log.tilt[-1]),
-            body[2] - ground,
-            body[2],
-            log.reference_body_z[-1],
-            base.body_height,
-        ):
-            return True
-        if settings.stop_at_goal and progress(body[:2]) >= progress(goal) - GOAL_TOLERANCE:
-            return True
-        if controller.state is GaitState.FROZEN:
-            frozen_since.append(log.time[-1])
-            return log.time[-1] - frozen_since[0] > FROZEN_TIMEOUT
-        frozen_since.clear()
-        return False
+            on_tick(t + dt)
+        return task.should_stop(t + dt)
 
     wall_start = time.perf_counter()
-    log = run_control_loop(
-        backend, controller, command, settings.seconds, settings.control_rate_hz, tick, stop
-    )
+    scheduler.run(tick, settings.seconds)
     wall_seconds = time.perf_counter() - wall_start
-    if perception is not None:
-        perception.close()
+    if camera is not None:
+        camera.close()
+    log = graph.recorder.log
+    status = task.status
+    assert status is not None
     metrics = walk_metrics(
         log,
         commanded_speed_mps=base.speed,
         wall_seconds=wall_seconds,
         foot_radius=spec.foot_radius,
         ground=terrain.height,
-        frozen_reason=controller.frozen_reason,
+        frozen_reason=status.frozen_reason,
     )
     final = log.array("body_position_in_world")[-1, :2]
-    resolution = settings.map.resolution
-    truth = TrueScores(terrain, resolution, settings.score, (-1.0, float(goal[0]) + 1.0, -1.5, 1.5))
+    goal = task.goal
+    truth = TrueScores(
+        terrain, settings.map.resolution, settings.score, (-1.0, float(goal[0]) + 1.0, -1.5, 1.5)
+    )
     metrics.update(foothold_metrics(log, terrain, truth, spec.foot_radius))
     metrics.update(
         {
-            "reached_goal": bool(
-                progress(final) >= progress(goal) - GOAL_TOLERANCE and not metrics["fell"]
-            ),
+            "reached_goal": bool(task.at_goal(final) and not metrics["fell"]),
             "goal_distance_m": float(np.linalg.norm(goal - final)),
-            "footholds_adjusted": controller.footholds_adjusted,
-            "frozen": controller.state is GaitState.FROZEN,
-            "frozen_reason": controller.frozen_reason,
+            "footholds_adjusted": status.footholds_adjusted,
+            "frozen": status.state is GaitState.FROZEN,
+            "frozen_reason": status.frozen_reason,
             "blind": settings.blind,
             "robot": spec.name,
             "terrain": terrain.name,
@@ -353,13 +314,13 @@ def simulate_walk(
             "stride_m": controller.config.stride,
         }
     )
-    if perception is not None:
-        metrics.update({"frames": perception.frames, **perception.timing()})
+    if mapping is not None and camera is not None:
+        metrics.update({"frames": mapping.frames, **mapping.timing(), **camera.timing()})
     return WalkResult(
         log=log,
         metrics=metrics,
         warnings=backend.warnings(),
         terrain=terrain,
         touchdowns=list(controller.touchdowns),
-        scores=perception.scores if perception is not None else None,
+        scores=mapping.scores if mapping is not None else None,
     )

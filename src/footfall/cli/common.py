@@ -1,0 +1,86 @@
+"""What the subcommands share: progress bars, metric tables, point-cloud options."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+
+def sim_progress(console: Console) -> Progress:
+    """A progress bar over simulated seconds."""
+    return Progress(
+        TextColumn("simulating"),
+        BarColumn(),
+        TextColumn("{task.completed:.1f}/{task.total:.0f} s"),
+        TimeRemainingColumn(),
+        console=console,
+        transient=True,
+    )
+
+
+def format_value(value: object, fmt: str | None = None) -> str:
+    """A metric for a table: NaN as n/a, else with ``fmt`` (floats to 4 digits by default)."""
+    if isinstance(value, float) and math.isnan(value):
+        return "n/a"
+    if fmt is not None:
+        return fmt.format(value)
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+def print_table(console: Console, title: str, rows: list[tuple[str, str]]) -> None:
+    """A two-column table of labels and values."""
+    table = Table(title=title)
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    for label, value in rows:
+        table.add_row(label, value)
+    console.print(table)
+
+
+def wrote(console: Console, paths: list[Path]) -> None:
+    """Say which files were written."""
+    names = [str(p) for p in paths]
+    listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+    console.print(f"Wrote {listed}")
+
+
+def add_cloud_options(p: argparse.ArgumentParser) -> None:
+    """Options of a point cloud's obstacle detection."""
+    p.add_argument(
+        "--frame",
+        choices=("camera", "map"),
+        default="camera",
+        help="frame the cloud's points are in",
+    )
+    p.add_argument(
+        "--ground",
+        choices=("plane", "ransac", "cone"),
+        default="plane",
+        help="ground removal: known plane z = 0, RANSAC's dominant plane, or inverted cones",
+    )
+    p.add_argument(
+        "--camera-height", type=float, default=0.0, help="camera height above the ground in m"
+    )
+    p.add_argument(
+        "--cluster-tolerance", type=float, default=0.30, help="Euclidean clustering radius in m"
+    )
+    p.add_argument("--min-cluster-size", type=int, default=5, help="smallest obstacle in points")
+
+
+def cloud_request(args: argparse.Namespace):
+    """The cloud request the cloud options describe."""
+    from footfall.reports.biped import CloudRequest
+
+    return CloudRequest(
+        cloud=args.cloud,
+        frame=args.frame,
+        ground=args.ground,
+        camera_height=args.camera_height,
+        cluster_tolerance=args.cluster_tolerance,
+        min_cluster_size=args.min_cluster_size,
+    )

@@ -1,0 +1,124 @@
+"""``footfall map``: a height map and score map, in simulation or from a recorded sequence."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from rich.console import Console
+
+from footfall.cli.common import format_value, print_table, sim_progress, wrote
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``map``."""
+    from footfall.reports.map import REAL_MAX_CELL_SPREAD
+    from footfall.sim.terrain import TERRAIN_NAMES
+
+    p = subparsers.add_parser(
+        "map",
+        help="build a height map and score map, in simulation or from a recorded sequence",
+        description=(
+            "Walk the simulated hexapod across a terrain while its depth camera builds the "
+            "rolling height map, or map a recorded TUM-layout sequence (--tum). Writes "
+            "heightmap.png, scoremap.png and metrics.json to --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument(
+        "--terrain", choices=TERRAIN_NAMES, default="course", help="terrain to walk and map"
+    )
+    p.add_argument("--seconds", type=float, default=20.0, help="walking time in seconds")
+    p.add_argument(
+        "--noise",
+        choices=("none", "slam"),
+        default="none",
+        help="pose estimate: true, or SLAM-like drift and jitter",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the terrain and the pose noise")
+    p.add_argument(
+        "--image-size",
+        type=int,
+        nargs=2,
+        metavar=("W", "H"),
+        default=(640, 480),
+        help="depth image size in pixels",
+    )
+    p.add_argument(
+        "--fusion",
+        choices=("latest", "max", "variance"),
+        default="latest",
+        help="per-cell fusion rule",
+    )
+    p.add_argument(
+        "--max-cell-spread",
+        type=float,
+        default=None,
+        help="height range in m within one cell in one frame (beyond its slope) above which "
+        "the cell straddles an edge; default: the score's for the simulated camera, "
+        f"{REAL_MAX_CELL_SPREAD} for a recorded sequence (a real sensor's noise spans mm)",
+    )
+    p.add_argument(
+        "--tum", type=Path, default=None, help="map this TUM-layout sequence instead of simulating"
+    )
+    p.add_argument(
+        "--intrinsics",
+        type=float,
+        nargs=4,
+        metavar=("FX", "FY", "CX", "CY"),
+        default=(525.0, 525.0, 319.5, 239.5),
+        help="depth camera intrinsics in pixels (with --tum)",
+    )
+    p.add_argument(
+        "--up",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        default=(0.0, 0.0, 1.0),
+        help="the recorded world's up axis (with --tum); TUM and Redwood worlds are not z-up",
+    )
+    p.add_argument(
+        "--depth-scale", type=float, default=1.0 / 5000.0, help="metres per depth unit (with --tum)"
+    )
+    p.add_argument("--out", type=Path, default=Path("footfall-out/map"), help="output folder")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace, console: Console) -> int:
+    """Map, write the outputs, print the metrics."""
+    from footfall.reports.map import MapRequest, run_map
+
+    request = MapRequest(
+        terrain=args.terrain,
+        seconds=args.seconds,
+        noise=args.noise,
+        seed=args.seed,
+        image_size=tuple(args.image_size),
+        fusion=args.fusion,
+        max_cell_spread=args.max_cell_spread,
+        tum=args.tum,
+        intrinsics=tuple(args.intrinsics),
+        up=tuple(args.up),
+        depth_scale=args.depth_scale,
+    )
+    if args.tum is not None:
+        console.print(f"Mapping recorded sequence {args.tum}")
+        report = run_map(request)
+    else:
+        width, height = args.image_size
+        console.print(
+            f"Mapping [bold]{args.terrain}[/] terrain for {args.seconds:g} s "
+            f"({width}x{height} depth, pose noise: {args.noise})"
+        )
+        with sim_progress(console) as progress:
+            task = progress.add_task("map", total=args.seconds)
+            report = run_map(request, on_tick=lambda t: progress.update(task, completed=t))
+    paths = report.write(args.out)
+    rows = [
+        (key, format_value(value))
+        for key, value in report.to_json().items()
+        if isinstance(value, float | int | str)
+    ]
+    print_table(console, "map summary", rows)
+    wrote(console, paths)
+    return 0

@@ -1,0 +1,162 @@
+"""``footfall walk``: the simulated hexapod crossing a terrain with the full loop."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from rich.console import Console
+
+from footfall.cli.common import format_value, print_table, sim_progress, wrote
+from footfall.motion.gait import GaitKind
+from footfall.robot.spec import BUILTIN_ROBOTS
+
+SUMMARY = (
+    ("distance", "distance_m", "{:.3f} m"),
+    ("mean speed", "mean_speed_mps", "{:.4f} m/s"),
+    ("commanded speed", "commanded_speed_mps", "{:.4f} m/s"),
+    ("fell", "fell", "{}"),
+    ("frozen", "frozen", "{}"),
+    ("body height error (mean)", "body_height_error_mean_m", "{:+.4f} m"),
+    ("body height oscillation", "body_height_oscillation_ratio", "{:.1%}"),
+    ("tilt max", "tilt_max_deg", "{:.2f} deg"),
+    ("tilt rms", "tilt_rms_deg", "{:.2f} deg"),
+    ("stance slip max", "stance_slip_max_m", "{:.4f} m"),
+    ("swing apex (median)", "swing_apex_median_m", "{:.3f} m"),
+    ("steps", "steps", "{}"),
+    ("reached goal", "reached_goal", "{}"),
+    ("distance to goal", "goal_distance_m", "{:.3f} m"),
+    ("invalid footholds", "invalid_footholds", "{}"),
+    ("footholds adjusted", "footholds_adjusted", "{}"),
+    ("min swing clearance", "min_clearance_m", "{:.4f} m"),
+    ("real-time factor", "realtime_factor", "{:.1f}x"),
+)
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``walk``."""
+    from footfall.reports.walk import DEFAULT_SPEED_MPS
+    from footfall.sim.terrain import TERRAIN_NAMES
+
+    p = subparsers.add_parser(
+        "walk",
+        help="simulate the hexapod walking across a terrain and measure it",
+        description=(
+            "Simulate the hexapod in MuJoCo walking to the far end of a terrain with the full "
+            "loop: depth camera -> height map -> walkability scores -> footholds -> gait -> "
+            "joints (or --blind, the thesis' baseline). Writes metrics.json, walk.png (body "
+            "height, roll and pitch, one foot's path) and footholds.png (every foothold over "
+            "the score map) to --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("--terrain", choices=TERRAIN_NAMES, default="stairs", help="terrain to cross")
+    p.add_argument(
+        "--seconds",
+        type=float,
+        default=60.0,
+        help="longest walking time in seconds; the walk ends at the goal",
+    )
+    p.add_argument(
+        "--speed",
+        type=float,
+        default=None,
+        help=(
+            f"body speed in m/s; default {DEFAULT_SPEED_MPS} m/s, or 3/4 of the gait's top speed "
+            "(stride over the shortest step) when that is lower"
+        ),
+    )
+    p.add_argument("--gait", choices=[g.value for g in GaitKind], default="tripod", help="gait")
+    p.add_argument(
+        "--robot",
+        default="default",
+        help=f"built-in robot ({', '.join(BUILTIN_ROBOTS)}) or a robot description TOML file",
+    )
+    p.add_argument(
+        "--blind",
+        action="store_true",
+        help="the thesis' baseline: no camera, nominal footholds on a flat floor, no feedback",
+    )
+    p.add_argument(
+        "--swing",
+        choices=("flow", "polynomial"),
+        default="flow",
+        help="swing trajectory: the thesis' flow function or its polynomial-arc baseline",
+    )
+    p.add_argument(
+        "--height", type=float, default=None, help="body height in m (robot's nominal by default)"
+    )
+    p.add_argument("--stride", type=float, default=None, help="stride in m (robot's by default)")
+    p.add_argument("--control-rate", type=float, default=100.0, help="controller rate in Hz")
+    p.add_argument(
+        "--image-size",
+        type=int,
+        nargs=2,
+        metavar=("W", "H"),
+        default=(320, 240),
+        help="depth image size in pixels",
+    )
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of the terrain (lays the cobblestones, shifts the stairs' start by up to "
+        "10 cm); runs with the same seed are identical",
+    )
+    p.add_argument("--rise", type=float, help="stairs: step height in m (default 0.04)")
+    p.add_argument(
+        "--groove", type=float, help="cobblestones: groove width between stones in m (0.03)"
+    )
+    p.add_argument("--out", type=Path, default=Path("footfall-out/walk"), help="output folder")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace, console: Console) -> int:
+    """Walk, write the outputs, print the summary."""
+    from footfall.reports.walk import WalkRequest, prepare_walk, run_walk
+
+    job = prepare_walk(
+        WalkRequest(
+            terrain=args.terrain,
+            seconds=args.seconds,
+            speed=args.speed,
+            gait=args.gait,
+            robot=args.robot,
+            blind=args.blind,
+            swing=args.swing,
+            height=args.height,
+            stride=args.stride,
+            control_rate_hz=args.control_rate,
+            image_size=tuple(args.image_size),
+            seed=args.seed,
+            rise=args.rise,
+            groove=args.groove,
+        )
+    )
+    mode = "blind (thesis baseline)" if args.blind else "with camera, map and foothold planning"
+    console.print(
+        f"Walking robot [bold]{job.spec.name}[/] across [bold]{args.terrain}[/] terrain, {mode}: "
+        f"{args.gait} gait at {job.speed:.3f} m/s, at most {args.seconds:g} s"
+    )
+    with sim_progress(console) as progress:
+        task = progress.add_task("walk", total=args.seconds)
+        report = run_walk(job, on_tick=lambda t: progress.update(task, completed=t))
+    paths = report.write(args.out)
+    metrics = report.to_json()
+    print_table(
+        console,
+        "walk summary",
+        [(label, format_value(metrics[key], fmt)) for label, key, fmt in SUMMARY],
+    )
+    if metrics["reached_goal"]:
+        console.print(
+            f"[green]Reached the goal[/] with {metrics['invalid_footholds']} invalid footholds."
+        )
+    elif metrics["fell"]:
+        console.print("[red]The robot fell.[/]")
+    elif metrics["frozen"]:
+        console.print(f"[yellow]The robot froze safely:[/] {metrics['frozen_reason']}")
+    else:
+        console.print(f"Time ran out {metrics['goal_distance_m']:.2f} m short of the goal.")
+    wrote(console, paths)
+    return 0

@@ -1,0 +1,39 @@
+"""Messages between footfall's nodes, and their byte encoding."""
+
+from footfall.messages.codec import Message as Message
+from footfall.messages.codec import decode as decode
+from footfall.messages.codec import message_types as message_types
+from footfall.messages.types import DepthFrame as DepthFrame
+from footfall.messages.types import EffectorTargets as EffectorTargets
+from footfall.messages.types import GaitState as GaitState
+from footfall.messages.types import GaitStatus as GaitStatus
+from footfall.messages.types import GroundPrior as GroundPrior
+from footfall.messages.types import JointTargets as JointTargets
+from footfall.messages.types import LogLine as LogLine
+from footfall.messages.types import MapUpdate as MapUpdate
+from footfall.messages.types import Mode as Mode
+from footfall.messages.types import ModeCommand as ModeCommand
+from footfall.messages.types import PoseEstimate as PoseEstimate
+from footfall.messages.types import RobotState as RobotState
+from footfall.messages.types import Touchdown as Touchdown
+from footfall.messages.types import WalkCommand as WalkCommand
+
+__all__ = [
+    "DepthFrame",
+    "EffectorTargets",
+    "GaitState",
+    "GaitStatus",
+    "GroundPrior",
+    "JointTargets",
+    "LogLine",
+    "MapUpdate",
+    "Message",
+    "Mode",
+    "ModeCommand",
+    "PoseEstimate",
+    "RobotState",
+    "Touchdown",
+    "WalkCommand",
+    "decode",
+    "message_types",
+]

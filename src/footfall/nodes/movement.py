@@ -1,0 +1,156 @@
+"""The movement node: command, mode, pose and map in; effector targets and gait status out.
+
+It runs the walking controller (gait, footholds on the map, swing paths, feedback) once per
+control tick. Map updates go to the terrain planner, pose estimates re-register the
+controller's world. In torque-off it holds still and only reports. A command watchdog
+keeps the robot safe when the operator's link drops: with no command for
+``command_timeout`` seconds while walking, the robot is brought to a standstill with all
+feet down, the status says why, and the next command resumes it.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from footfall.messages import (
+    EffectorTargets,
+    GaitState,
+    GaitStatus,
+    MapUpdate,
+    Mode,
+    ModeCommand,
+    PoseEstimate,
+    RobotState,
+    Touchdown,
+    WalkCommand,
+)
+from footfall.motion.walker import WalkController
+from footfall.nodes.mapping import scores_of, snapshot_of
+from footfall.runtime.bus import Bus
+
+# No command for this long while walking stops the robot [s].
+COMMAND_TIMEOUT_S = 0.5
+_LEG_IN_REASON = re.compile(r"\bleg (\w+)")
+
+
+class MovementNode:
+    """The walking controller on the bus.
+
+    Args:
+        bus: The bus.
+        controller: The walking controller (with its terrain planner, if any).
+        command_timeout: Watchdog limit [s]; None for no watchdog (a scripted run).
+    """
+
+    name = "movement"
+
+    def __init__(
+        self,
+        bus: Bus,
+        controller: WalkController,
+        command_timeout: float | None = COMMAND_TIMEOUT_S,
+    ) -> None:
+        self.bus = bus
+        self.controller = controller
+        self.command_timeout = command_timeout
+        self.mode = Mode.TORQUE_OFF
+        self.command: WalkCommand | None = None
+        self.state: RobotState | None = None
+        self.stop_reason = ""
+        self._time = 0.0
+        self._command_time = -math.inf
+        self._fresh_command = False
+        self._touchdowns_sent = 0
+        bus.subscribe(ModeCommand.TOPIC, self._on_mode, last=True)
+        bus.subscribe(WalkCommand.TOPIC, self._on_command, last=True)
+        bus.subscribe(RobotState.TOPIC, self._on_state, last=True)
+        if controller.planner is not None:
+            bus.subscribe(MapUpdate.TOPIC, self._on_map, last=True)
+            bus.subscribe(PoseEstimate.TOPIC, self._on_pose)
+        self.publish_status()
+
+    # Inputs ------------------------------------------------------------------------------
+    def _on_mode(self, message: ModeCommand) -> None:
+        if message.mode is Mode.WALKING and self.mode is not Mode.WALKING:
+            self.controller.restart_clock()  # no time passed for the controller while limp
+        self.mode = message.mode
+
+    def _on_command(self, message: WalkCommand) -> None:
+        self.command = message
+        self._fresh_command = True
+
+    def _on_state(self, message: RobotState) -> None:
+        self.state = message
+
+    def _on_map(self, message: MapUpdate) -> None:
+        planner = self.controller.planner
+        assert planner is not None
+        planner.update(snapshot_of(message), scores_of(message))
+
+    def _on_pose(self, message: PoseEstimate) -> None:
+        self.controller.correct_pose(message.planar_body)
+        self.publish_status()
+
+    # The tick ----------------------------------------------------------------------------
+    def _command_now(self, t: float) -> WalkCommand | None:
+        """The command in force at ``t``: the latest, or a standstill once it is stale."""
+        if self._fresh_command:
+            self._command_time = t
+            self._fresh_command = False
+            self.stop_reason = ""
+        if self.command is None:
+            return None
+        age = t - self._command_time
+        if self.command_timeout is not None and age > self.command_timeout:
+            if not self.stop_reason:
+                self.stop_reason = (
+                    f"no command for {age:.2f} s (limit {self.command_timeout:.2f} s): "
+                    "standing still until the next command"
+                )
+            return WalkCommand(speed=0.0, body_height=self.command.body_height)
+        return self.command
+
+    def tick(self, t: float) -> None:
+        """One control tick at controller time ``t`` [s]."""
+        self._time = t
+        command = self._command_now(t)
+        if self.mode is not Mode.WALKING or command is None:
+            self.publish_status()
+            return
+        c = self.controller
+        feet = c.update(t, command, self.state)
+        self.bus.publish(
+            EffectorTargets.TOPIC,
+            EffectorTargets(
+                stamp=t,
+                feet_in_body=feet.feet_in_body,
+                foot_velocities_in_body=feet.velocities_in_body,
+                swinging=c.swinging.copy(),
+                feet_in_world=c.feet_commanded_in_world,
+            ),
+        )
+        for record in c.touchdowns[self._touchdowns_sent :]:
+            self.bus.publish(Touchdown.TOPIC, record)
+        self._touchdowns_sent = len(c.touchdowns)
+        self.publish_status()
+
+    def publish_status(self) -> GaitStatus:
+        """Publish the gait status now; returns it."""
+        c = self.controller
+        reason = c.frozen_reason if c.state is GaitState.FROZEN else self.stop_reason
+        leg = _LEG_IN_REASON.search(reason)
+        status = GaitStatus(
+            stamp=self._time,
+            mode=self.mode,
+            state=c.state,
+            frozen_reason=reason,
+            frozen_leg=leg.group(1) if leg else "",
+            body_pose=c.pose,
+            body_z=c.height,
+            steps_taken=c.scheduler.steps_taken,
+            footholds_adjusted=c.footholds_adjusted,
+            command_age=self._time - self._command_time,
+        )
+        self.bus.publish(GaitStatus.TOPIC, status)
+        return status

@@ -1,0 +1,61 @@
+"""The benchmarks of ``footfall bench``: mapping speed, and walking over a terrain sweep."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from footfall.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class BenchReport:
+    """A benchmark's figures.
+
+    Attributes:
+        suite: ``"mapping"`` or ``"terrain"``.
+        figures: The ``bench.json`` content.
+    """
+
+    suite: str
+    figures: dict[str, object] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, object]:
+        """The ``bench.json`` content."""
+        return dict(self.figures)
+
+    def write(self, out: Path) -> list[Path]:
+        """Write ``bench.json`` (and for the terrain sweep ``bench.png``) to ``out``."""
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "bench.json"]
+        paths[0].write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        if self.suite == "terrain":
+            from footfall.plots import plot_terrain_benchmark
+
+            paths.append(out / "bench.png")
+            plot_terrain_benchmark(self.figures, paths[1])
+        return paths
+
+
+def run_mapping_bench(repeats: int = 30) -> BenchReport:
+    """Time the map update and the scoring against their NumPy baselines."""
+    from footfall.benchmarking import run_mapping_benchmark
+
+    if repeats < 1:
+        raise ConfigError(f"--repeats must be at least 1, got {repeats}")
+    return BenchReport("mapping", dict(run_mapping_benchmark(repeats=repeats)))
+
+
+def run_terrain_bench(
+    seeds: int, seconds: float, jobs: int = 1, on_run: Callable[[str], None] | None = None
+) -> BenchReport:
+    """Planned against blind walking over the terrain sweep (see ``run_terrain_benchmark``)."""
+    from footfall.benchmarking import run_terrain_benchmark
+
+    if seeds < 1:
+        raise ConfigError(f"--seeds must be at least 1, got {seeds}")
+    if jobs < 1:
+        raise ConfigError(f"--jobs must be at least 1, got {jobs}")
+    return BenchReport("terrain", run_terrain_benchmark(seeds, seconds, on_run=on_run, jobs=jobs))

@@ -1,0 +1,196 @@
+"""A simulated walk across a terrain, as ``footfall walk`` runs it."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from footfall.errors import ConfigError
+from footfall.messages import WalkCommand
+from footfall.motion.gait import GaitConfig
+from footfall.robot.spec import HexapodSpec, load_spec
+from footfall.sim.model import CameraMount
+from footfall.sim.terrain import Terrain, make_terrain
+from footfall.sim.walk import TrueScores, WalkResult, WalkSettings, simulate_walk
+
+# The walk's default speed [m/s], lowered to 3/4 of the gait's top speed where that is less.
+DEFAULT_SPEED_MPS = 0.10
+# Terrain parameters a walk may set, with the terrain each belongs to.
+TERRAIN_PARAMETERS = {"rise": "stairs", "groove": "cobblestones"}
+
+
+@dataclass(frozen=True)
+class WalkRequest:
+    """What to walk (the options of ``footfall walk``).
+
+    Attributes:
+        terrain: Terrain name.
+        seconds: Longest walking time [s].
+        speed: Body speed [m/s]; None for the default.
+        gait: Gait name.
+        robot: Built-in robot name or a robot TOML file.
+        blind: The thesis' baseline (no camera, nominal footholds, no feedback).
+        swing: ``"flow"`` or ``"polynomial"``.
+        height: Body height [m]; None for the robot's.
+        stride: Stride [m]; None for the robot's.
+        control_rate_hz: Controller rate [Hz].
+        image_size: Depth image width and height [px].
+        seed: Terrain seed.
+        rise: Stairs' step height [m], or None.
+        groove: Cobblestones' groove width [m], or None.
+    """
+
+    terrain: str = "stairs"
+    seconds: float = 60.0
+    speed: float | None = None
+    gait: str = "tripod"
+    robot: str = "default"
+    blind: bool = False
+    swing: str = "flow"
+    height: float | None = None
+    stride: float | None = None
+    control_rate_hz: float = 100.0
+    image_size: tuple[int, int] = (320, 240)
+    seed: int = 0
+    rise: float | None = None
+    groove: float | None = None
+
+
+@dataclass(frozen=True)
+class WalkJob:
+    """A walk request resolved against its robot and terrain.
+
+    Attributes:
+        request: The request.
+        spec: The robot.
+        settings: The simulation settings.
+        terrain: The terrain.
+        terrain_params: The terrain parameters the request set.
+    """
+
+    request: WalkRequest
+    spec: HexapodSpec
+    settings: WalkSettings
+    terrain: Terrain
+    terrain_params: dict[str, float]
+
+    @property
+    def speed(self) -> float:
+        """Commanded body speed [m/s]."""
+        return self.settings.command.speed
+
+
+def prepare_walk(request: WalkRequest) -> WalkJob:
+    """Resolve a request: the robot, the speed, the terrain and its parameters.
+
+    Raises:
+        ConfigError: A speed above the gait's top speed, or a terrain parameter given for
+            another terrain.
+    """
+    spec = load_spec(request.robot)
+    gait = GaitConfig(kind=request.gait, swing=request.swing, stride_length=request.stride)
+    max_speed = gait.for_robot(spec.stride_length, spec.max_step_height).max_speed
+    speed = min(DEFAULT_SPEED_MPS, 0.75 * max_speed) if request.speed is None else request.speed
+    if speed > max_speed + 1e-12:
+        raise ConfigError(
+            f"--speed {speed} m/s is above the {request.gait} gait's top speed "
+            f"{max_speed:.3f} m/s for robot {spec.name!r} (stride over the shortest step); "
+            "lower it or use a faster gait"
+        )
+    params = {}
+    for name, kind in TERRAIN_PARAMETERS.items():
+        value = getattr(request, name)
+        if value is not None:
+            if request.terrain != kind:
+                raise ConfigError(f"--{name} applies to --terrain {kind} only")
+            params[name] = value
+    terrain = make_terrain(request.terrain, request.seed, **params)
+    height = spec.body_height if request.height is None else request.height
+    width, image_height = request.image_size
+    settings = WalkSettings(
+        terrain=request.terrain,
+        seconds=request.seconds,
+        command=WalkCommand(speed=speed, body_height=height),
+        gait=gait,
+        blind=request.blind,
+        camera=CameraMount(width=width, height=image_height),
+        control_rate_hz=request.control_rate_hz,
+        seed=request.seed,
+        stop_at_goal=True,
+    )
+    return WalkJob(request, spec, settings, terrain, params)
+
+
+@dataclass(frozen=True)
+class WalkReport:
+    """The outcome of a walk.
+
+    Attributes:
+        job: What was walked.
+        result: The simulation's record and metrics.
+    """
+
+    job: WalkJob
+
+    result: WalkResult
+
+    def to_json(self) -> dict[str, object]:
+        """The ``metrics.json`` content."""
+        metrics = dict(self.result.metrics)
+        metrics["mujoco_warnings"] = self.result.warnings
+        metrics["terrain_params"] = self.job.terrain_params
+        return metrics
+
+    def write(self, out: Path) -> list[Path]:
+        """Write ``metrics.json``, ``walk.png`` and ``footholds.png`` to ``out``."""
+        from footfall.plots import plot_footholds, plot_walk
+
+        job, result = self.job, self.result
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "metrics.json", out / "walk.png", out / "footholds.png"]
+        paths[0].write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        r = job.request
+        title = f"{job.spec.name}: {r.gait} gait at {job.speed:.3f} m/s on {r.terrain} terrain"
+        plot_walk(
+            result.log,
+            paths[1],
+            leg=0,
+            leg_name=job.spec.leg_names[0],
+            ground=result.terrain.height,
+            title=title + (" (blind)" if r.blind else ""),
+        )
+        if result.scores is not None:
+            s = result.scores
+            background = (s.score, s.valid, s.origin, s.resolution)
+            label = "the robot's score map"
+        else:
+            goal_x = result.terrain.goal[0]
+            truth = TrueScores(
+                result.terrain,
+                job.settings.map.resolution,
+                job.settings.score,
+                (-1.0, goal_x + 1.0, -1.5, 1.5),
+            )
+            background = (truth.score, truth.valid, truth.origin, truth.resolution)
+            label = "the true terrain's score map"
+        plot_footholds(
+            result.touchdowns,
+            *background,
+            paths[2],
+            result.log.array("body_position_in_world")[:, :2],
+            title=f"footholds over {label}",
+        )
+        return paths
+
+
+def run_walk(job: WalkJob, on_tick: Callable[[float], None] | None = None) -> WalkReport:
+    """Simulate a prepared walk.
+
+    Args:
+        job: The walk (see :func:`prepare_walk`).
+        on_tick: Progress callback with the walk time [s].
+    """
+    result = simulate_walk(job.spec, job.settings, on_tick=on_tick, terrain=job.terrain)
+    return WalkReport(job, result)

@@ -1,0 +1,98 @@
+"""The simulated robot's camera and pose source, as nodes.
+
+The camera node renders MuJoCo's depth buffer at the camera rate and publishes each image
+with its intrinsics and extrinsics. The pose node answers every image with the pose the
+camera had when it was taken, as visual SLAM does (thesis §3.3): the simulator's truth, or
+that truth with SLAM-like drift and jitter.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+from scipy.spatial.transform import Rotation
+
+from footfall.messages import DepthFrame, PoseEstimate
+from footfall.runtime.bus import Bus
+from footfall.sensing.pose import Pose, SlamNoise
+from footfall.sim.camera import SimDepthCamera
+from footfall.sim.hexapod import MujocoHexapod
+from footfall.sim.model import CameraMount
+
+
+def true_body_pose(backend: MujocoHexapod) -> Pose:
+    """The simulated body's true pose in the world."""
+    data, torso = backend.data, backend.model.body("torso").id
+    return Pose(data.xpos[torso].copy(), Rotation.from_matrix(data.xmat[torso].reshape(3, 3)))
+
+
+class SimCameraNode:
+    """Depth images of a simulated robot's body camera.
+
+    Args:
+        bus: The bus.
+        backend: The simulated robot (built with the camera mount).
+        mount: The camera mount.
+    """
+
+    name = "camera"
+
+    def __init__(self, bus: Bus, backend: MujocoHexapod, mount: CameraMount) -> None:
+        self.bus = bus
+        self.backend = backend
+        self.camera = SimDepthCamera(backend.model, mount)
+        self.period = 1.0 / mount.rate_hz
+        self.camera_in_body = (
+            true_body_pose(backend).inverse().compose(self.camera.pose(backend.data))
+        )
+        self.render_ms: list[float] = []
+        self._next_frame = 0.0
+
+    def tick(self, t: float) -> bool:
+        """Take and publish a frame if one is due at time ``t`` [s]; True when it did."""
+        if t + 1e-9 < self._next_frame:
+            return False
+        self._next_frame += self.period
+        t0 = time.perf_counter()
+        depth, _ = self.camera.capture(self.backend.data)
+        self.render_ms.append(1e3 * (time.perf_counter() - t0))
+        frame = DepthFrame(
+            t, depth, self.camera.intrinsics, self.camera_in_body, sequence=len(self.render_ms)
+        )
+        self.bus.publish(DepthFrame.TOPIC, frame)
+        return True
+
+    def timing(self) -> dict[str, float]:
+        """Median render time [ms]."""
+        ms = self.render_ms
+        return {"render_ms_median": statistics.median(ms) if ms else float("nan")}
+
+    def close(self) -> None:
+        """Release the renderer."""
+        self.camera.close()
+
+
+class SimPoseNode:
+    """Pose estimates of a simulated camera, one per depth image.
+
+    Args:
+        bus: The bus.
+        camera: The camera node whose images it answers.
+        noise: SLAM-like noise, or None for the true pose.
+    """
+
+    name = "pose"
+
+    def __init__(self, bus: Bus, camera: SimCameraNode, noise: SlamNoise | None = None) -> None:
+        self.bus = bus
+        self.camera = camera
+        self.noise = noise
+        self._body_in_camera = camera.camera_in_body.inverse()
+        bus.subscribe(DepthFrame.TOPIC, self._on_depth)
+
+    def _on_depth(self, frame: DepthFrame) -> None:
+        true_pose = self.camera.camera.pose(self.camera.backend.data)
+        pose = self.noise.estimate(true_pose, frame.stamp) if self.noise is not None else true_pose
+        estimate = PoseEstimate(frame.stamp, pose, pose.compose(self._body_in_camera))
+        self.bus.publish(PoseEstimate.TOPIC, estimate)
