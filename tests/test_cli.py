@@ -209,3 +209,14 @@ def test_bench_terrain_writes_its_table_and_chart(tmp_path, monkeypatch):
         assert {k: v for k, v in a.items() if k != "wall_seconds"} == {
             k: v for k, v in b.items() if k != "wall_seconds"
         }
+
+
+def test_walk_paced_to_the_wall_clock(tmp_path):
+    """`footfall walk --realtime` runs the control loop on wall-clock deadlines: a second
+    of walking takes about a second, and the overruns are counted."""
+    out = tmp_path / "rt"
+    args = ["walk", "--terrain", "flat", "--blind", "--seconds", "1.5", "--realtime"]
+    assert main([*args, "--out", str(out)]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert 0.7 < metrics["realtime_factor"] <= 1.05
+    assert metrics["control_overruns"] >= 0 and "control_max_late_s" in metrics

@@ -89,6 +89,34 @@ def test_accept_callback_filters_candidates():
     assert found.moved == pytest.approx(0.2 - 0.15, abs=0.011)
 
 
+@given(st.integers(0, 2**32 - 1), st.floats(0.0, 1.0), st.floats(0.0, 1.0))
+@settings(max_examples=100, deadline=None)
+def test_a_batched_test_finds_what_the_one_by_one_test_finds(seed, density, keep):
+    """Testing candidates many at once (`first_accepted`) picks the same foothold as
+    testing them one by one (`accept`), whatever the test rejects."""
+    rng = np.random.default_rng(seed)
+    valid = rng.uniform(size=(40, 40)) < density
+    scores = _score_map(valid, rng.uniform(0, 0.5, (40, 40)))
+    heights = rng.uniform(-0.05, 0.05, (40, 40))
+    search = FootholdSearch(FootholdConfig(search_radius=0.16), RES)
+    salt = rng.uniform()
+
+    def accept(point):
+        return (np.sin(1e3 * point[0] + 7e2 * point[1] + salt) + 1) / 2 < keep
+
+    def first_accepted(points):
+        ok = [accept(p) for p in points]
+        return ok.index(True) if True in ok else -1
+
+    nominal = rng.uniform(0.2, 0.6, 2)
+    one = search.search(nominal, scores, heights, accept=accept)
+    many = search.search(nominal, scores, heights, first_accepted=first_accepted)
+    assert (one is None) == (many is None)
+    if one is not None:
+        assert one.cell == many.cell and one.moved == many.moved
+        np.testing.assert_array_equal(one.position, many.position)
+
+
 def test_offsets_are_in_order_of_true_distance():
     """Candidates come nearest first (not in square rings)."""
     offsets, distances = sorted_offsets(5.0)

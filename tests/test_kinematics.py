@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from footfall.errors import SingularConfigurationError, UnreachableTargetError
 from footfall.robot.kinematics import LegKinematics
@@ -159,3 +160,16 @@ def test_rest_stance_is_reachable_for_every_robot():
         feet = spec.rest_feet_in_body()
         feet[:, 2] += spec.foot_radius
         KINEMATICS[name].inverse_in_body(feet)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    offsets=arrays(np.float64, (6, 3), elements=st.floats(-0.15, 0.15)),
+    margin=st.floats(0.0, 0.03),
+)
+def test_reachable_all_agrees_with_each_leg(default_spec, offsets, margin):
+    """The six-leg reach test gives each leg's own answer."""
+    kin = LegKinematics(default_spec)
+    feet = default_spec.rest_feet_in_body() + offsets
+    expected = [kin.reachable(leg, feet[leg], margin) for leg in range(6)]
+    assert kin.reachable_all(feet, margin).tolist() == expected

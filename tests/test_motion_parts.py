@@ -279,5 +279,6 @@ def test_a_stall_of_two_cycles_freezes_naming_the_leg_pulled_back_most():
     targets[4, 0] = -0.12
     names = ("LF", "LM", "LB", "RB", "RM", "RF")
     reasons = [safety.stalled(0.0, 0.1, 2, True, nominal, targets, names) for _ in range(4)]
-    assert reasons[:3] == ["", "", ""] and reasons[3].startswith("leg RM: blocked")
-    assert safety.stalled(0.0, 0.1, 2, False, nominal, targets, names) == ""
+    assert reasons[:3] == [None, None, None]
+    assert reasons[3].reason.startswith("leg RM: blocked") and reasons[3].leg == "RM"
+    assert safety.stalled(0.0, 0.1, 2, False, nominal, targets, names) is None

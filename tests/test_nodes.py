@@ -122,6 +122,23 @@ def test_a_lost_command_stream_stops_the_robot_with_all_feet_down(default_spec):
     assert robot.status[-1].body_pose.x > after.x + 0.05
 
 
+def test_an_unreachable_command_freezes_the_robot_and_names_the_leg(default_spec):
+    """A body height no leg reaches freezes the robot on the mock: the status says so and
+    names the leg, the joint targets stop changing, and a reachable command resumes it."""
+    robot = Robot(default_spec)
+    robot.bus.publish(ModeCommand.TOPIC, ModeCommand(Mode.WALKING))
+    robot.run(6.0, WalkCommand(speed=0.0, body_height=0.5))  # rises at 7 cm/s until stuck
+    status = robot.status[-1]
+    assert status.state is GaitState.FROZEN
+    assert "out of reach" in status.frozen_reason
+    assert status.frozen_leg in default_spec.leg_names
+    held = robot.joint_targets[-1].positions
+    robot.run(0.5, WalkCommand(speed=0.0, body_height=0.5))
+    np.testing.assert_array_equal(robot.joint_targets[-1].positions, held)
+    robot.run(0.1, WALK)
+    assert robot.status[-1].state is not GaitState.FROZEN
+
+
 def test_back_to_torque_off_goes_limp(default_spec):
     """Torque-off while walking makes the servos limp and stops the joint targets."""
     robot = Robot(default_spec)

@@ -7,7 +7,6 @@ One module per subcommand, each parsing its options into a request, calling the 
 from __future__ import annotations
 
 import argparse
-import sys
 
 from rich.console import Console
 
@@ -38,7 +37,3 @@ def main(argv: list[str] | None = None) -> int:
     except FootfallError as exc:
         console.print(f"[red]error:[/] {exc}")
         return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -107,6 +107,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--groove", type=float, help="cobblestones: groove width between stones in m (0.03)"
     )
+    p.add_argument(
+        "--realtime",
+        action="store_true",
+        help="pace the control loop to the wall clock, as on a real robot (overruns counted)",
+    )
     p.add_argument("--out", type=Path, default=Path("footfall-out/walk"), help="output folder")
     p.set_defaults(handler=run)
 
@@ -131,6 +136,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
             seed=args.seed,
             rise=args.rise,
             groove=args.groove,
+            realtime=args.realtime,
         )
     )
     mode = "blind (thesis baseline)" if args.blind else "with camera, map and foothold planning"

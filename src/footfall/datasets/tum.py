@@ -25,7 +25,7 @@ from footfall.errors import DatasetError
 from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
 from footfall.messages import DepthFrame, PoseEstimate
 from footfall.nodes.mapping import MappingNode
-from footfall.runtime.bus import InProcessBus
+from footfall.runtime.bus import Bus, InProcessBus
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
@@ -184,6 +184,55 @@ def floor_flatness(snapshot: MapSnapshot, band: float = 0.03) -> dict[str, float
     }
 
 
+class TumSequenceSource:
+    """A recorded sequence as the camera and pose source of a graph.
+
+    Each frame goes out as its pose estimate (the recorded camera pose, turned so the
+    world's up axis is +z; the camera is the body) followed by its depth image.
+
+    Args:
+        bus: The bus.
+        folder: TUM-layout sequence.
+        camera: Depth intrinsics.
+        up: The world's up axis in the sequence's coordinates.
+        depth_scale: Metres per depth unit.
+
+    Raises:
+        DatasetError: Missing or malformed files, or no frame with a pose.
+    """
+
+    name = "recording"
+
+    def __init__(
+        self,
+        bus: Bus,
+        folder: str | Path,
+        camera: PinholeCamera,
+        up: npt.ArrayLike,
+        depth_scale: float = TUM_DEPTH_SCALE,
+    ) -> None:
+        self.bus = bus
+        self.camera = camera
+        self.depth_scale = depth_scale
+        self.frames, self.skipped = read_tum_sequence(folder)
+        if not self.frames:
+            raise DatasetError(f"{folder}: no depth frame has a pose within tolerance")
+        align = Pose(np.zeros(3), up_to_z(up))
+        self.poses = [align.compose(f.camera_pose) for f in self.frames]
+
+    def play(self) -> int:
+        """Publish every frame, as fast as they load; returns how many."""
+        camera_in_body = Pose(np.zeros(3), Rotation.identity())
+        for number, (frame, pose) in enumerate(zip(self.frames, self.poses, strict=True), 1):
+            depth = load_depth_png(frame.depth_path)
+            self.bus.publish(PoseEstimate.TOPIC, PoseEstimate(frame.timestamp, pose, pose))
+            image = DepthFrame(
+                frame.timestamp, depth, self.camera, camera_in_body, self.depth_scale, number
+            )
+            self.bus.publish(DepthFrame.TOPIC, image)
+        return len(self.frames)
+
+
 def map_tum_sequence(
     folder: str | Path,
     camera: PinholeCamera,
@@ -207,13 +256,9 @@ def map_tum_sequence(
     Returns:
         The map, its scores, the camera path and metrics.
     """
-    frames, skipped = read_tum_sequence(folder)
-    if not frames:
-        raise DatasetError(f"{folder}: no depth frame has a pose within tolerance")
-    align = Pose(np.zeros(3), up_to_z(up))
-    poses = [align.compose(f.camera_pose) for f in frames]
     bus = InProcessBus()
-    start = poses[0].position
+    source = TumSequenceSource(bus, folder, camera, up, depth_scale)
+    start = source.poses[0].position
     mapping = MappingNode(
         bus,
         map_config,
@@ -222,22 +267,15 @@ def map_tum_sequence(
         centre=(float(start[0]), float(start[1])),
         stride=stride,
     )
-    camera_in_body = Pose(np.zeros(3), Rotation.identity())  # the camera is the body
-    for number, (frame, pose) in enumerate(zip(frames, poses, strict=True), start=1):
-        depth = load_depth_png(frame.depth_path)
-        bus.publish(PoseEstimate.TOPIC, PoseEstimate(frame.timestamp, pose, pose))
-        bus.publish(
-            DepthFrame.TOPIC,
-            DepthFrame(frame.timestamp, depth, camera, camera_in_body, depth_scale, number),
-        )
-    mapping.publish(frames[-1].timestamp)
+    source.play()
+    mapping.publish(source.frames[-1].timestamp)
     snapshot = mapping.height_map.snapshot()
     scores = mapping.scores
     assert scores is not None
-    path = np.array([p.position[:2] for p in poses])
+    path = np.array([p.position[:2] for p in source.poses])
     metrics: dict[str, object] = {
         "frames": mapping.frames,
-        "frames_skipped_no_pose": skipped + mapping.frames_skipped_no_pose,
+        "frames_skipped_no_pose": source.skipped + mapping.frames_skipped_no_pose,
         **mapping.timing(),
         "cells_known": int(snapshot.known.sum()),
         "pixels_dropped": mapping.pixels_dropped,

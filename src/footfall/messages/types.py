@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import StrEnum
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -304,13 +305,13 @@ class RobotState(Message):
     feet_in_contact: npt.NDArray[np.bool_] | None = None
     foot_orientations_in_world: npt.NDArray[np.float64] | None = None
 
-    @property
+    @cached_property
     def roll_pitch(self) -> tuple[float, float]:
         """Body roll and pitch [rad] (intrinsic z-y-x Euler angles of the attitude)."""
         _, pitch, roll = self.orientation_body_in_world.as_euler("ZYX")
         return float(roll), float(pitch)
 
-    @property
+    @cached_property
     def tilt(self) -> float:
         """Angle between the body z axis and the world z axis [rad]."""
         z_axis = self.orientation_body_in_world.apply([0.0, 0.0, 1.0])

@@ -79,9 +79,7 @@ class LegSolver:
         Supporting feet are never moved.
         """
         out = feet_in_body.copy()
-        for leg in np.flatnonzero(swinging):
-            if self.kinematics.reachable(leg, out[leg]):
-                continue
+        for leg in np.flatnonzero(swinging & ~self.kinematics.reachable_all(out)):
             for candidate in (out[leg], self.within_coxa_range(int(leg), out[leg])):
                 drops = np.arange(0.0, 0.1001, 0.005)
                 lowered = candidate - np.outer(drops, [0.0, 0.0, 1.0])

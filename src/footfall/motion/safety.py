@@ -13,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.messages import WalkCommand
+from footfall.planning.terrain_planner import NoFoothold
 
 # A robot frozen for want of a foothold retries after this many new map frames.
 MAP_FRAMES_BEFORE_RETRY = 5
@@ -37,26 +38,34 @@ class SafetyMonitor:
 
     Attributes:
         reason: Why the robot froze ("" when it is not frozen).
+        leg: The leg the freeze concerns ("" when none).
         frozen_command: The command in force when it froze.
     """
 
     def __init__(self) -> None:
         self.reason = ""
+        self.leg = ""
         self.frozen_command: WalkCommand | None = None
         self._frozen_version = -1
         self._stalled_steps = 0
 
     def freeze(
-        self, reason: str, command: WalkCommand | None, map_version: int | None = None
+        self,
+        reason: str,
+        command: WalkCommand | None,
+        map_version: int | None = None,
+        leg: str = "",
     ) -> None:
         """Record a freeze; ``map_version`` is the map's version when a new map may help."""
         self.reason = reason
+        self.leg = leg
         self.frozen_command = command
         self._frozen_version = map_version if map_version is not None else -1
 
     def resume(self) -> None:
         """Clear the freeze."""
         self.reason = ""
+        self.leg = ""
 
     def may_resume(self, command: WalkCommand, map_version: int | None) -> bool:
         """Whether a frozen robot should try again: a changed command, or a fresh map."""
@@ -78,7 +87,7 @@ class SafetyMonitor:
         nominal: npt.NDArray[np.float64],
         targets: npt.NDArray[np.float64],
         leg_names: tuple[str, ...],
-    ) -> str:
+    ) -> NoFoothold | None:
         """Count a finished step; the freeze reason once two gait cycles made no progress.
 
         Args:
@@ -91,18 +100,19 @@ class SafetyMonitor:
             leg_names: Leg names, for the reason.
 
         Returns:
-            The reason, naming the leg pulled back furthest from its nominal foothold; ""
-            while the body advances.
+            Why, naming the leg pulled back furthest from its nominal foothold; None while
+            the body advances.
         """
         walking = speed > STALL_SPEED
         self._stalled_steps = self._stalled_steps + 1 if walking and moved < STALL_DISTANCE else 0
         if not detects or self._stalled_steps < 2 * cycle_steps:
-            return ""
+            return None
         pulled = np.linalg.norm(targets[:, :2] - nominal[:, :2], axis=1)
         leg = leg_names[int(np.argmax(pulled))]
         self._stalled_steps = 0
-        return (
+        return NoFoothold(
             f"leg {leg}: blocked, no valid foothold it can reach ahead "
             f"(its nominal foothold is {pulled.max():.2f} m from the nearest acceptable cell; "
-            f"the body has not advanced for two gait cycles)"
+            f"the body has not advanced for two gait cycles)",
+            leg,
         )

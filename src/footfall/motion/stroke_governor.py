@@ -62,8 +62,14 @@ class StrokeGovernor:
         # Body-frame velocity of a world-fixed point: -(v + omega x p).
         drift = np.stack([-vx + yaw_rate * feet[:, 1], -vy - yaw_rate * feet[:, 0]], axis=1)
         scale = 1.0
+        drifts = drift * horizons[:, None]
+        if self.reach_margin is not None:
+            # Feet that stay reached over the whole drift need no bisection.
+            after = feet.copy()
+            after[:, :2] += drifts
+            stance = stance & ~self.kinematics.reachable_all(after, self.reach_margin)
         for leg in np.flatnonzero(stance):
-            u = drift[leg] * horizons[leg]
+            u = drifts[leg]
             if float(u @ u) < 1e-12:
                 continue
             if self.reach_margin is None:

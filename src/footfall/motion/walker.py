@@ -6,21 +6,12 @@ trajectories to targets chosen so that each foot passes under its rest position 
 mid-stance (thesis §5.3.4, eqs. 5.17-5.20, implemented for their intent). Foot positions
 are foot-sphere centres, one foot radius above the ground when down.
 
-The controller composes its parts, each in its own module:
-
-- :class:`~footfall.motion.command_shaping.CommandShaper`: the rate-limited body twist;
-- :class:`~footfall.motion.stroke_governor.StrokeGovernor`: how much of it the supporting
-  feet allow;
-- :class:`~footfall.motion.gait_scheduler.GaitScheduler`: swing groups and step timing;
-- a :class:`~footfall.motion.foothold_policy.FootholdPolicy`: nominal footholds on the plane
-  z = 0 (blind) or the terrain planner's on the map;
-- :class:`~footfall.motion.feedback.BodyFeedback`: attitude and height feedback;
-- :class:`~footfall.motion.leg_solver.LegSolver`: feedback, reach limits, rolling;
-- :class:`~footfall.motion.safety.SafetyMonitor`: freezing and resuming.
-
-The gait state machine is the thesis' (Table 5.1): ``REST`` holds every foot down,
-``STEPPING`` walks, back to ``REST`` once every foot is home; ``FROZEN`` (a target out of
-reach, no acceptable foothold) holds the last targets, all feet down, and says why.
+The controller is a thin composition of its parts, each in its own module of
+``footfall.motion``: command shaping, the stroke governor, the gait scheduler, a foothold
+policy (blind or mapped), body feedback, the leg solver and the safety monitor. Its state
+machine is the thesis' (Table 5.1): ``REST`` holds every foot down, ``STEPPING`` walks,
+back to ``REST`` once every foot is home; ``FROZEN`` (a target out of reach, no acceptable
+foothold) holds the last targets, all feet down, and says why.
 """
 
 from __future__ import annotations
@@ -121,6 +112,11 @@ class WalkController:
         return self.safety.reason
 
     @property
+    def frozen_leg(self) -> str:
+        """The leg the freeze concerns ("" when none, or not frozen)."""
+        return self.safety.leg
+
+    @property
     def body_velocity_in_body(self) -> tuple[float, float]:
         """Reference body velocity after rate limits and the stroke governor [m/s]."""
         v, k = self.shaper.velocity, self._velocity_scale
@@ -171,7 +167,7 @@ class WalkController:
         try:
             targets = self._solve(swing_velocity)
         except UnreachableTargetError as exc:
-            self._freeze(str(exc), command, map_may_help=False)
+            self._freeze(str(exc), command, map_may_help=False, leg=exc.leg)
             return self._last_targets
         self._last_targets = targets
         if self.state is GaitState.FROZEN:
@@ -226,10 +222,15 @@ class WalkController:
         )
 
     def _freeze(
-        self, reason: str, command: WalkCommand | None = None, map_may_help: bool = True
+        self,
+        reason: str,
+        command: WalkCommand | None = None,
+        map_may_help: bool = True,
+        leg: str = "",
     ) -> None:
         self.state = GaitState.FROZEN
-        self.safety.freeze(reason, command, self.footholds.map_version if map_may_help else None)
+        version = self.footholds.map_version if map_may_help else None
+        self.safety.freeze(reason, command, version, leg)
 
     def _govern(self, t: float) -> float:
         """The stroke governor's fraction of the twist; 0 unless the legs are stepping."""
@@ -300,11 +301,12 @@ class WalkController:
             plan.targets,
             self.spec.leg_names,
         )
-        if stalled:
+        if stalled is not None:
             # The way ahead has no foothold the legs reach: only a new command resumes.
-            self._freeze(stalled, self.shaper.last_command, map_may_help=False)
+            command = self.shaper.last_command
+            self._freeze(stalled.reason, command, map_may_help=False, leg=stalled.leg)
         elif plan.pending_freeze:
-            self._freeze(str(plan.pending_freeze))
+            self._freeze(plan.pending_freeze.reason, leg=plan.pending_freeze.leg)
             plan.pending_freeze = None
 
     def _start_step(self, t: float) -> None:
@@ -325,7 +327,7 @@ class WalkController:
         if isinstance(targets, NoFoothold):
             # No step started: every foot is still down. The same group tries again later.
             s.group_index, s.start_of_walk = group_before, start_before
-            self._freeze(str(targets))
+            self._freeze(targets.reason, leg=targets.leg)
             return
         self.swinging = swing
         self.state = GaitState.STEPPING

@@ -11,7 +11,6 @@ feet down, the status says why, and the next command resumes it.
 from __future__ import annotations
 
 import math
-import re
 
 from footfall.messages import (
     EffectorTargets,
@@ -31,7 +30,6 @@ from footfall.runtime.bus import Bus
 
 # No command for this long while walking stops the robot [s].
 COMMAND_TIMEOUT_S = 0.5
-_LEG_IN_REASON = re.compile(r"\bleg (\w+)")
 
 
 class MovementNode:
@@ -138,14 +136,14 @@ class MovementNode:
     def publish_status(self) -> GaitStatus:
         """Publish the gait status now; returns it."""
         c = self.controller
-        reason = c.frozen_reason if c.state is GaitState.FROZEN else self.stop_reason
-        leg = _LEG_IN_REASON.search(reason)
+        frozen = c.state is GaitState.FROZEN
+        reason = c.frozen_reason if frozen else self.stop_reason
         status = GaitStatus(
             stamp=self._time,
             mode=self.mode,
             state=c.state,
             frozen_reason=reason,
-            frozen_leg=leg.group(1) if leg else "",
+            frozen_leg=c.frozen_leg if frozen else "",
             body_pose=c.pose,
             body_z=c.height,
             steps_taken=c.scheduler.steps_taken,

@@ -128,6 +128,10 @@ def _eroded(valid: npt.NDArray[np.bool_], cells: int) -> npt.NDArray[np.bool_]:
     return out
 
 
+# Candidates tested at once, nearest first; the last size repeats to the end.
+_CHUNKS = (1, 8, 32, *([128] * 64))
+
+
 @dataclass(frozen=True)
 class Foothold:
     """A chosen foothold.
@@ -167,6 +171,7 @@ class FootholdSearch:
         scores: ScoreMap,
         heights: npt.NDArray[np.float64],
         accept: Callable[[npt.NDArray[np.float64]], bool] | None = None,
+        first_accepted: Callable[[npt.NDArray[np.float64]], int] | None = None,
     ) -> Foothold | None:
         """The nearest acceptable cell to a nominal foot position.
 
@@ -179,39 +184,51 @@ class FootholdSearch:
             heights: Mapped heights aligned with ``scores``, NaN where unknown [m].
             accept: Extra test of a candidate ground point (x, y, z): reachability,
                 stability. All candidates pass when None.
+            first_accepted: The same test for many candidates at once, for speed: given
+                ground points in search order, shape (m, 3), the index of the first that
+                passes, or -1. Used instead of ``accept`` when given.
 
         Returns:
             The foothold, or None when no cell within the radius passes.
         """
         nominal = np.asarray(nominal_xy, dtype=np.float64)
         res = scores.resolution
-        centre = np.floor((nominal - np.asarray(scores.origin)) / res).astype(np.int64)
+        origin = np.asarray(scores.origin)
+        centre = np.floor((nominal - origin) / res).astype(np.int64)
         cells = centre + self.offsets
         n_i, n_j = scores.valid.shape
         inside = (cells[:, 0] >= 0) & (cells[:, 0] < n_i) & (cells[:, 1] >= 0) & (cells[:, 1] < n_j)
         cells, distances = cells[inside], self.distances[inside]
         tried = np.zeros(len(cells), dtype=bool)
+        if first_accepted is None:
+
+            def first_accepted(points: npt.NDArray[np.float64]) -> int:
+                if accept is None:
+                    return 0 if len(points) else -1
+                return next((k for k, p in enumerate(points) if accept(p)), -1)
+
         for margin in self.config.edge_margins:
             ok = self._eroded(scores, margin)[cells[:, 0], cells[:, 1]] & ~tried
             tried |= ok
             candidates, candidate_distances = cells[ok], distances[ok]
             cell_scores = scores.score[candidates[:, 0], candidates[:, 1]]
             order = np.lexsort((cell_scores, np.round(candidate_distances, 9)))  # distance, score
-            for k in order:
-                i, j = (int(v) for v in candidates[k])
-                # The nominal cell keeps the nominal position (no adjustment); others their
-                # centre.
-                on_nominal = i == centre[0] and j == centre[1]
-                xy = (
-                    nominal
-                    if on_nominal
-                    else np.asarray(scores.origin) + (np.array([i, j]) + 0.5) * res
-                )
-                point = np.array([xy[0], xy[1], heights[i, j]])
-                if accept is None or accept(point):
-                    return Foothold(
-                        point, (i, j), float(np.hypot(*(xy - nominal))), float(cell_scores[k])
-                    )
+            ordered = candidates[order]
+            # The nominal cell keeps the nominal position (no adjustment); others their centre.
+            xy = origin + (ordered + 0.5) * res
+            xy[(ordered[:, 0] == centre[0]) & (ordered[:, 1] == centre[1])] = nominal
+            points = np.column_stack([xy, heights[ordered[:, 0], ordered[:, 1]]])
+            start = 0
+            for size in _CHUNKS:  # the nearest few first: most searches end there
+                if start >= len(points):
+                    break
+                k = first_accepted(points[start : start + size])
+                if k >= 0:
+                    k += start
+                    i, j = (int(v) for v in ordered[k])
+                    moved = float(np.hypot(*(xy[k] - nominal)))
+                    return Foothold(points[k], (i, j), moved, float(cell_scores[order[k]]))
+                start += size
         return None
 
     def _eroded(self, scores: ScoreMap, margin: int) -> npt.NDArray[np.bool_]:

@@ -208,24 +208,31 @@ class TerrainPlanner:
             ) -> npt.NDArray[np.bool_]:
                 return self._reach_heights(leg, centre, reach_poses, heights, c.reach_margin)
 
-            def accept(
-                point: npt.NDArray[np.float64],
+            def first_accepted(
+                points: npt.NDArray[np.float64],
                 leg: int = leg,
                 allowed: npt.NDArray[np.bool_] = feasible,
-            ) -> bool:
-                centre = np.array([point[0], point[1], point[2] + r])
-                if not (allowed & reached_at(centre)).any():
-                    return False
-                support = targets[support_after].copy()
-                support[np.flatnonzero(support_after) == leg] = centre
-                return all(
-                    point_in_polygon_margin((pose.x, pose.y), support[:, :2])
-                    >= c.footholds.stability_margin
-                    for pose in poses.stable
-                )
+            ) -> int:
+                """The first candidate reached at an allowed height and stable, or -1."""
+                centres = points.copy()
+                centres[:, 2] += r
+                reach = self._reach_heights(leg, centres, reach_poses, heights, c.reach_margin)
+                for m in np.flatnonzero((allowed & reach).any(axis=1)):
+                    support = targets[support_after].copy()
+                    support[np.flatnonzero(support_after) == leg] = centres[m]
+                    if all(
+                        point_in_polygon_margin((pose.x, pose.y), support[:, :2])
+                        >= c.footholds.stability_margin
+                        for pose in poses.stable
+                    ):
+                        return int(m)
+                return -1
 
             foothold = self._search.search(
-                nominal[leg, :2], self.scores, self.snapshot.heights, accept
+                nominal[leg, :2],
+                self.scores,
+                self.snapshot.heights,
+                first_accepted=first_accepted,
             )
             if foothold is None:
                 return NoFoothold(
@@ -247,11 +254,22 @@ class TerrainPlanner:
         heights: npt.NDArray[np.float64],
         margin: float,
     ) -> npt.NDArray[np.bool_]:
-        """At which body heights the leg reaches a world point from every pose, shape (k,)."""
-        ok = np.ones(len(heights), dtype=bool)
+        """At which body heights the leg reaches world points from every pose.
+
+        Args:
+            leg: Leg index.
+            foot: World point, shape (3,), or several, shape (..., 3) [m].
+            poses: Body poses.
+            heights: Body heights in the world, shape (k,) [m].
+            margin: Workspace margin [m].
+
+        Returns:
+            Shape (k,) for one point, else (..., k).
+        """
+        ok = np.ones((*np.shape(foot)[:-1], len(heights)), dtype=bool)
         for pose in poses:
-            in_body = np.repeat(pose.points_to_body(foot[None]), len(heights), axis=0)
-            in_body[:, 2] -= heights
+            in_body = np.repeat(pose.points_to_body(foot)[..., None, :], len(heights), axis=-2)
+            in_body[..., 2] -= heights
             ok &= self.kinematics.reachable(leg, in_body, margin)
         return ok
 

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from footfall.errors import ConfigError
+from footfall.reports import write_json
 
 
 @dataclass(frozen=True)
@@ -30,7 +30,7 @@ class BenchReport:
         """Write ``bench.json`` (and for the terrain sweep ``bench.png``) to ``out``."""
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "bench.json"]
-        paths[0].write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        write_json(paths[0], self.to_json())
         if self.suite == "terrain":
             from footfall.plots import plot_terrain_benchmark
 

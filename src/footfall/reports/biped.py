@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -11,6 +10,7 @@ from footfall.biped.obstacles import Detection, DetectionConfig, detect_obstacle
 from footfall.biped.planner import WalkPlan, plan_walk
 from footfall.errors import ConfigError
 from footfall.io.clouds import read_points
+from footfall.reports import write_json
 
 
 @dataclass(frozen=True)
@@ -93,7 +93,7 @@ class ObstacleReport:
 
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "obstacles.json", out / "obstacles.png"]
-        paths[0].write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        write_json(paths[0], self.to_json())
         plot_obstacles(self.detection, paths[1])
         return paths
 
@@ -144,7 +144,7 @@ class PlanReport:
 
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "plan.json", out / "plan.png"]
-        paths[0].write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        write_json(paths[0], self.to_json())
         plot_plan(self.plan, paths[1])
         return paths
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -12,6 +11,7 @@ import numpy.typing as npt
 
 from footfall.errors import DatasetError
 from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
+from footfall.reports import write_json
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
 
 # Largest height range within a flat map cell in one frame for recorded data [m]: a real
@@ -96,7 +96,7 @@ class MapReport:
             self.path_xy,
             path_label=self.path_label,
         )
-        paths[2].write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        write_json(paths[2], self.to_json())
         return paths
 
 

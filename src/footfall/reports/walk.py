@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -10,6 +9,7 @@ from pathlib import Path
 from footfall.errors import ConfigError
 from footfall.messages import WalkCommand
 from footfall.motion.gait import GaitConfig
+from footfall.reports import write_json
 from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.sim.model import CameraMount
 from footfall.sim.terrain import Terrain, make_terrain
@@ -40,6 +40,7 @@ class WalkRequest:
         seed: Terrain seed.
         rise: Stairs' step height [m], or None.
         groove: Cobblestones' groove width [m], or None.
+        realtime: Pace the walk to the wall clock.
     """
 
     terrain: str = "stairs"
@@ -56,6 +57,7 @@ class WalkRequest:
     seed: int = 0
     rise: float | None = None
     groove: float | None = None
+    realtime: bool = False
 
 
 @dataclass(frozen=True)
@@ -119,6 +121,7 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
         control_rate_hz=request.control_rate_hz,
         seed=request.seed,
         stop_at_goal=True,
+        realtime=request.realtime,
     )
     return WalkJob(request, spec, settings, terrain, params)
 
@@ -150,7 +153,7 @@ class WalkReport:
         job, result = self.job, self.result
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "metrics.json", out / "walk.png", out / "footholds.png"]
-        paths[0].write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        write_json(paths[0], self.to_json())
         r = job.request
         title = f"{job.spec.name}: {r.gait} gait at {job.speed:.3f} m/s on {r.terrain} terrain"
         plot_walk(

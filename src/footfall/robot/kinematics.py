@@ -165,7 +165,32 @@ class LegKinematics:
             A bool for one target, else a bool array of shape (...).
         """
         p = np.asarray(foot_in_body, dtype=np.float64) - self.mounts_in_body[leg]
-        c, s = self._cos_yaw[leg], self._sin_yaw[leg]
+        ok = self._reached(p, self._cos_yaw[leg], self._sin_yaw[leg], margin)
+        return bool(ok) if np.ndim(ok) == 0 else ok
+
+    def reachable_all(
+        self, feet_in_body: npt.ArrayLike, margin: float = 0.0
+    ) -> npt.NDArray[np.bool_]:
+        """Whether each leg reaches its foot target: :meth:`reachable` for all six at once.
+
+        Args:
+            feet_in_body: One target per leg, shape (..., 6, 3) [m].
+            margin: As for :meth:`reachable`.
+
+        Returns:
+            Shape (..., 6).
+        """
+        p = np.asarray(feet_in_body, dtype=np.float64) - self.mounts_in_body
+        return np.asarray(self._reached(p, self._cos_yaw, self._sin_yaw, margin))
+
+    def _reached(
+        self,
+        p: npt.NDArray[np.float64],
+        c: float | npt.NDArray[np.float64],
+        s: float | npt.NDArray[np.float64],
+        margin: float,
+    ) -> npt.NDArray[np.bool_]:
+        """Reach and joint-limit test of foot positions relative to their mounts (body axes)."""
         x = c * p[..., 0] + s * p[..., 1]
         y = -s * p[..., 0] + c * p[..., 1]
         z = p[..., 2]
@@ -178,11 +203,12 @@ class LegKinematics:
         t3 = -np.arccos(np.clip(cos_knee, -1.0, 1.0))
         t2 = np.arctan2(z, r) - np.arctan2(self.L3 * np.sin(t3), self.L2 + self.L3 * np.cos(t3))
         t2 = np.mod(t2 + np.pi, 2.0 * np.pi) - np.pi
-        angles = np.stack([np.arctan2(y, x), t2, t3], axis=-1)
         slack = margin / self.L3
-        within = np.all((angles >= self.lower + slack) & (angles <= self.upper - slack), axis=-1)
-        ok = in_reach & within
-        return bool(ok) if ok.ndim == 0 else ok
+        low, high = self.lower + slack, self.upper - slack
+        ok = in_reach
+        for angle, axis in ((np.arctan2(y, x), 0), (t2, 1), (t3, 2)):
+            ok = ok & (angle >= low[axis]) & (angle <= high[axis])
+        return ok
 
     def check_limits(self, angles: npt.ArrayLike) -> None:
         """Raise :class:`UnreachableTargetError` if any angle, shape (6, 3), is out of range."""

@@ -22,7 +22,7 @@ from footfall.planning.terrain_planner import TerrainPlanner, TerrainPlannerConf
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus, InProcessBus
-from footfall.runtime.scheduler import SimulatedScheduler
+from footfall.runtime.scheduler import SimulatedScheduler, WallClockScheduler
 from footfall.scoring.walkability import ScoreConfig, ScoreMap, edge_cells, score_heights
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import CameraMount
@@ -56,6 +56,8 @@ class WalkSettings:
         settle_seconds: Time the robot stands still before walking [s].
         seed: Seed of random terrains.
         stop_at_goal: End the walk once the goal is reached.
+        realtime: Pace the control ticks to the wall clock (as a real robot runs) instead
+            of simulating as fast as the machine can.
     """
 
     terrain: str = "flat"
@@ -72,6 +74,7 @@ class WalkSettings:
     settle_seconds: float = 0.5
     seed: int = 0
     stop_at_goal: bool = False
+    realtime: bool = False
 
     def __post_init__(self) -> None:
         if self.terrain not in TERRAINS:
@@ -263,7 +266,11 @@ def simulate_walk(
     task = TerrainTask(bus, terrain, base, settings.stop_at_goal)
     graph = WalkingGraph.build(bus, backend, controller)
     task.begin()
-    scheduler = SimulatedScheduler(settings.control_rate_hz)
+    scheduler = (
+        WallClockScheduler(settings.control_rate_hz)
+        if settings.realtime
+        else SimulatedScheduler(settings.control_rate_hz)
+    )
     dt = scheduler.period
 
     def tick(t: float) -> bool:
@@ -316,6 +323,14 @@ def simulate_walk(
     )
     if mapping is not None and camera is not None:
         metrics.update({"frames": mapping.frames, **mapping.timing(), **camera.timing()})
+    if isinstance(scheduler, WallClockScheduler):
+        metrics.update(
+            {
+                "control_overruns": scheduler.stats.overruns,
+                "control_ticks_skipped": scheduler.stats.skipped,
+                "control_max_late_s": scheduler.stats.max_late_s,
+            }
+        )
     return WalkResult(
         log=log,
         metrics=metrics,
