@@ -16,6 +16,7 @@ import numpy.typing as npt
 
 from footfall.motion.command_shaping import CommandShaper
 from footfall.motion.gait import GaitConfig, GaitKind, active_sextant, tripod_swing_set
+from footfall.robot.planar import PlanarPose
 
 
 class GaitScheduler:
@@ -25,6 +26,7 @@ class GaitScheduler:
         config: Gait parameters.
         rest_in_body: Rest foot positions, shape (6, 3) [m].
         mounts_in_body: Leg mount positions, shape (6, 3) [m].
+        foot_radius: Height of a foot's centre over the ground when down [m].
 
     Attributes:
         group_index: Index of the group that swings (or swung last).
@@ -39,8 +41,10 @@ class GaitScheduler:
         config: GaitConfig,
         rest_in_body: npt.NDArray[np.float64],
         mounts_in_body: npt.NDArray[np.float64],
+        foot_radius: float = 0.0,
     ) -> None:
         self.config = config
+        self.foot_radius = foot_radius
         self.rest_in_body = rest_in_body
         self.mounts_in_body = mounts_in_body
         self.group_index = len(config.groups) - 1
@@ -70,6 +74,34 @@ class GaitScheduler:
             else self.config.rest_step_duration
         )
         self.step_start = t
+
+    def rest_feet_in_world(self, pose: PlanarPose) -> npt.NDArray[np.float64]:
+        """The rest stance under a body pose, feet on the plane z = 0, shape (6, 3) [m]."""
+        feet = pose.points_to_world(self.rest_in_body)
+        feet[:, 2] = self.foot_radius
+        return feet
+
+    def off_rest(
+        self, feet_in_world: npt.NDArray[np.float64], pose: PlanarPose
+    ) -> npt.NDArray[np.bool_]:
+        """Which feet are off their rest positions under the body, shape (6,)."""
+        offset = feet_in_world[:, :2] - self.rest_feet_in_world(pose)[:, :2]
+        return np.hypot(offset[:, 0], offset[:, 1]) > self.config.rest_tolerance
+
+    def nominal_targets(
+        self,
+        t: float,
+        pose: PlanarPose,
+        velocity: tuple[float, float],
+        yaw_rate: float,
+    ) -> npt.NDArray[np.float64]:
+        """Touchdown targets in the world, shape (6, 3) [m].
+
+        Each leg's rest position at the body pose predicted for the middle of its coming
+        stance (the twist held), so that the stance stroke is centred on rest.
+        """
+        horizon = self.remaining(t) + 0.5 * (self.n_groups - 1) * self.step_duration
+        return self.rest_feet_in_world(pose.moved(velocity, yaw_rate, horizon))
 
     def choose_group(
         self,

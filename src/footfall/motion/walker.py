@@ -44,14 +44,12 @@ from footfall.robot.spec import HexapodSpec
 
 # Time step of the finite difference that gives the swing foot's velocity [s].
 _VELOCITY_PROBE_DT = 1e-3
+# A body this far off its reference height on resuming is re-anchored on the encoders [m].
+REANCHOR_HEIGHT = 0.01
 
 
 class WalkController:
-    """Turns walk commands into foot targets for a hexapod.
-
-    Without a planner it walks blind on the plane z = 0 (the thesis' baseline); with a
-    :class:`~footfall.planning.terrain_planner.TerrainPlanner` its footholds come from the
-    map (:class:`~footfall.motion.foothold_policy.MappedFootholds`).
+    """Turns walk commands into foot targets: blind, or on a terrain planner's footholds.
 
     Args:
         spec: The robot.
@@ -84,7 +82,7 @@ class WalkController:
         )
         self.shaper = CommandShaper(self.config, self.height)
         self.scheduler = GaitScheduler(
-            self.config, self._rest_in_body, spec.mount_positions_in_body
+            self.config, self._rest_in_body, spec.mount_positions_in_body, spec.foot_radius
         )
         self.governor = StrokeGovernor(
             self.config, self.kinematics, self._rest_in_body, self.footholds.reach_margin
@@ -93,12 +91,14 @@ class WalkController:
         self.solver = LegSolver(self.kinematics, spec.foot_radius)
         self.safety = SafetyMonitor()
         self.state = GaitState.REST
-        self.feet_in_world = self._rest_feet_in_world()
+        self.feet_in_world = self.scheduler.rest_feet_in_world(self.pose)
         self.swinging = np.zeros(6, dtype=bool)
         self.swings: dict[int, SwingTrajectory] = {}
         self.floor = 0.0  # ground height the body keeps its commanded height above [m]
         self.footholds_adjusted = 0
         self.touchdowns: list[Touchdown] = []
+        # Hold still: finish the step under way, then take no new one (a lost link).
+        self.holding = False
         self._time: float | None = None
         self._velocity_scale = 1.0
         self._step_speed_scale = 1.0  # the fraction of the command this step plans for
@@ -113,7 +113,7 @@ class WalkController:
 
     @property
     def frozen_leg(self) -> str:
-        """The leg the freeze concerns ("" when none, or not frozen)."""
+        """The leg the freeze concerns ("" when none)."""
         return self.safety.leg
 
     @property
@@ -174,12 +174,29 @@ class WalkController:
             self.safety.frozen_command = command
         return targets
 
-    def restart_clock(self) -> None:
-        """Forget the last update's time: the next update advances by nothing.
+    def restart_clock(self, state: RobotState | None = None) -> None:
+        """Start again after a pause (torque-off): the next update advances by nothing.
 
-        For a controller that was paused (servos limp, torque-off) while time went on.
+        A measured body more than ``REANCHOR_HEIGHT`` off the reference (a limp robot sinks)
+        re-anchors the feet on the encoders; the body then rises at the height rate limit
+        and the feet step back to rest: the robot stands up.
         """
         self._time = None
+        if state is None:
+            return
+        feet = state.orientation_body_in_world.apply(
+            self.kinematics.forward_in_body(state.joint_positions)
+        )
+        height = self.spec.foot_radius - float(feet[:, 2].mean())
+        if abs(height - self.height) <= REANCHOR_HEIGHT:
+            return
+        self.height = height
+        self.feet_in_world = self.pose.points_to_world(feet)
+        self.feet_in_world[:, 2] += height
+        self.swings, self.swinging[:] = {}, False
+        self.state = GaitState.REST
+        self.safety.resume()
+        self.shaper.stop()
 
     def correct_pose(self, estimate: PlanarPose) -> None:
         """Re-register the controller's world on a body pose estimate in the map frame.
@@ -255,22 +272,13 @@ class WalkController:
         limit = self.config.height_rate_limit * dt
         self.height += float(np.clip(dh, -limit, limit))
 
-    def _rest_feet_in_world(self, pose: PlanarPose | None = None) -> npt.NDArray[np.float64]:
-        feet = (pose or self.pose).points_to_world(self._rest_in_body)
-        feet[:, 2] = self.spec.foot_radius
-        return feet
-
-    def _feet_off_rest(self) -> npt.NDArray[np.bool_]:
-        offset = self.feet_in_world[:, :2] - self._rest_feet_in_world()[:, :2]
-        return np.hypot(offset[:, 0], offset[:, 1]) > self.config.rest_tolerance
-
     def _advance_gait(self, t: float) -> None:
         if self.state is GaitState.STEPPING and self.scheduler.step_over(t):
             self._touch_down(t)
             if self.state is GaitState.FROZEN:
                 return
-        if self.state is GaitState.REST:
-            if self.shaper.moving or self._feet_off_rest().any():
+        if self.state is GaitState.REST and not self.holding:
+            if self.shaper.moving or self.scheduler.off_rest(self.feet_in_world, self.pose).any():
                 self._start_step(t)
             else:
                 self.scheduler.start_of_walk = True  # at rest: the next walk starts anew
@@ -312,7 +320,9 @@ class WalkController:
     def _start_step(self, t: float) -> None:
         s = self.scheduler
         group_before, start_before = s.group_index, s.start_of_walk
-        swing = s.choose_group(self.shaper, self._feet_off_rest(), self.feet_in_body)
+        swing = s.choose_group(
+            self.shaper, self.scheduler.off_rest(self.feet_in_world, self.pose), self.feet_in_body
+        )
         if not swing.any():
             return
         s.begin_step(t, self.shaper)
@@ -356,19 +366,9 @@ class WalkController:
             self.floor = floor
 
     def _nominal_targets(self) -> npt.NDArray[np.float64]:
-        """Touchdown targets in the world, shape (6, 3) [m].
-
-        Each leg's rest position at the body pose predicted for the middle of its coming
-        stance, so that the stance stroke is centred on rest.
-        """
-        s = self.scheduler
-        remaining = s.remaining(self._time or 0.0)
-        horizon = remaining + 0.5 * (s.n_groups - 1) * s.step_duration
-        # Predict with the reference twist actually applied (after the stroke governor), so
-        # targets follow the body; they are re-planned as the twist changes.
-        vx, vy = self.body_velocity_in_body
-        predicted = self.pose.moved((vx, vy), self.shaper.yaw_rate * self._velocity_scale, horizon)
-        return self._rest_feet_in_world(predicted)
+        # With the twist actually applied (after the governor): targets follow the body.
+        twist = (self.body_velocity_in_body, self.shaper.yaw_rate * self._velocity_scale)
+        return self.scheduler.nominal_targets(self._time or 0.0, self.pose, *twist)
 
     def _move_swing_feet(self, t: float) -> npt.NDArray[np.float64]:
         """Move swinging feet along their paths; returns their world velocities, shape (6, 3)."""

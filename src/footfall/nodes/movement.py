@@ -4,8 +4,10 @@ It runs the walking controller (gait, footholds on the map, swing paths, feedbac
 control tick. Map updates go to the terrain planner, pose estimates re-register the
 controller's world. In torque-off it holds still and only reports. A command watchdog
 keeps the robot safe when the operator's link drops: with no command for
-``command_timeout`` seconds while walking, the robot is brought to a standstill with all
-feet down, the status says why, and the next command resumes it.
+``command_timeout`` seconds while walking, the body stops at once (within the acceleration
+limit), the feet in the air land where they were going and no further step is taken, so the
+robot stands still with all feet down; the status says why, and the next command resumes
+it.
 """
 
 from __future__ import annotations
@@ -71,7 +73,8 @@ class MovementNode:
     # Inputs ------------------------------------------------------------------------------
     def _on_mode(self, message: ModeCommand) -> None:
         if message.mode is Mode.WALKING and self.mode is not Mode.WALKING:
-            self.controller.restart_clock()  # no time passed for the controller while limp
+            # No time passed for the controller while limp; it stands up from where it lies.
+            self.controller.restart_clock(self.state)
         self.mode = message.mode
 
     def _on_command(self, message: WalkCommand) -> None:
@@ -97,6 +100,7 @@ class MovementNode:
             self._command_time = t
             self._fresh_command = False
             self.stop_reason = ""
+            self.controller.holding = False
         if self.command is None:
             return None
         age = t - self._command_time
@@ -106,6 +110,8 @@ class MovementNode:
                     f"no command for {age:.2f} s (limit {self.command_timeout:.2f} s): "
                     "standing still until the next command"
                 )
+            # Stop the body now and land the feet in the air; take no further step.
+            self.controller.holding = True
             return WalkCommand(speed=0.0, body_height=self.command.body_height)
         return self.command
 

@@ -60,6 +60,10 @@ class Bus(Protocol):
         """Ask ``service`` and wait for its reply [s]."""
         ...
 
+    def spin(self, timeout: float = 0.0) -> int:
+        """Deliver what has arrived from elsewhere; returns how much (0 in one process)."""
+        ...
+
 
 class InProcessBus:
     """A deterministic bus for the nodes of one process.
@@ -109,6 +113,10 @@ class InProcessBus:
             known = ", ".join(sorted(self._services)) or "none"
             raise ServiceError(f"no server for service {service!r} (served: {known})")
         return self._carry(service, handler(self._carry(service, message)))
+
+    def spin(self, timeout: float = 0.0) -> int:
+        """Nothing to do: in one process every message is delivered when published."""
+        return 0
 
     def last(self, topic: str) -> Message | None:
         """The latest message published on ``topic``, if any."""

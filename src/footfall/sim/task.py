@@ -2,8 +2,9 @@
 
 It steers the robot along the straight line from the terrain's start to its goal, aiming a
 little ahead on it, at the commanded speed; it stops commanding motion once the goal is
-reached. It decides when a run is over: a fall, the goal (when asked to stop there), or a
-robot frozen for ``FROZEN_TIMEOUT`` seconds.
+reached. It decides when a run is over: a fall while walking (a limp robot in torque-off
+lying down has not fallen), the goal (when asked to stop there), or a robot frozen for
+``FROZEN_TIMEOUT`` seconds.
 """
 
 from __future__ import annotations
@@ -35,17 +36,25 @@ class TerrainTask:
         terrain: The terrain (start, goal and the true ground for the fall rule).
         command: Speed and body height to walk at.
         stop_at_goal: End the run once the goal is reached.
+        frozen_timeout: End the run once the robot has been frozen this long [s]; None
+            never (an operator may still change its direction).
     """
 
     name = "task"
 
     def __init__(
-        self, bus: Bus, terrain: Terrain, command: WalkCommand, stop_at_goal: bool = False
+        self,
+        bus: Bus,
+        terrain: Terrain,
+        command: WalkCommand,
+        stop_at_goal: bool = False,
+        frozen_timeout: float | None = FROZEN_TIMEOUT,
     ) -> None:
         self.bus = bus
         self.terrain = terrain
         self.base = command
         self.stop_at_goal = stop_at_goal
+        self.frozen_timeout = frozen_timeout
         self.start = np.asarray(terrain.start, dtype=np.float64)
         self.goal = np.asarray(terrain.goal, dtype=np.float64)
         self.route = (self.goal - self.start) / np.linalg.norm(self.goal - self.start)
@@ -100,7 +109,7 @@ class TerrainTask:
             return False
         body = state.position_body_in_world
         ground = float(self.terrain.height(body[0], body[1]))
-        if fallen(
+        if status.mode is Mode.WALKING and fallen(
             math.degrees(state.tilt),
             body[2] - ground,
             body[2],
@@ -110,9 +119,9 @@ class TerrainTask:
             return True
         if self.stop_at_goal and self.at_goal(body[:2]):
             return True
-        if status.state is GaitState.FROZEN:
+        if status.state is GaitState.FROZEN and self.frozen_timeout is not None:
             if self._frozen_since is None:
                 self._frozen_since = t
-            return t - self._frozen_since > FROZEN_TIMEOUT
+            return t - self._frozen_since > self.frozen_timeout
         self._frozen_since = None
         return False

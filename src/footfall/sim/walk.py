@@ -213,6 +213,143 @@ def foothold_metrics(
     }
 
 
+@dataclass
+class SimRobot:
+    """The simulated hexapod's own nodes on a bus: camera, pose, mapping, movement, servo.
+
+    Attributes:
+        spec: The robot.
+        settings: What is simulated.
+        terrain: The terrain it stands on.
+        backend: The MuJoCo robot.
+        bus: The bus the nodes talk over.
+        graph: The movement and servo nodes and the per-tick record.
+        camera: The camera node (planned walking), else None.
+        mapping: The mapping node (planned walking), else None.
+    """
+
+    spec: HexapodSpec
+    settings: WalkSettings
+    terrain: Terrain
+    backend: MujocoHexapod
+    bus: Bus
+    graph: WalkingGraph
+    camera: SimCameraNode | None
+    mapping: MappingNode | None
+
+    @classmethod
+    def build(
+        cls,
+        spec: HexapodSpec,
+        settings: WalkSettings,
+        terrain: Terrain,
+        bus: Bus,
+        command_timeout: float | None = None,
+    ) -> SimRobot:
+        """Put the robot on the terrain, let it settle, and start its nodes on ``bus``.
+
+        Blind, only the movement and servo nodes run; planned, the camera, pose and mapping
+        nodes too, with the ground under the standing robot as a prior and a first frame.
+        """
+        camera_mount = None if settings.blind else settings.camera
+        height = settings.command.body_height
+        backend = MujocoHexapod(spec, terrain, camera_mount, body_height=height)
+        backend.advance(settings.settle_seconds)
+        planner = camera = mapping = None
+        if not settings.blind:
+            planner = TerrainPlanner(spec, settings.planner)
+            standing = backend.read()
+            assert standing.position_body_in_world is not None
+            assert standing.feet_in_world is not None
+            body = standing.position_body_in_world
+            mapping = MappingNode(bus, settings.map, settings.score, centre=(body[0], body[1]))
+            camera = SimCameraNode(bus, backend, settings.camera)
+            SimPoseNode(bus, camera)
+            ground = float(np.mean(standing.feet_in_world[:, 2])) - spec.foot_radius
+            bus.publish(GroundPrior.TOPIC, GroundPrior(0.0, body, ground, START_PRIOR_RADIUS))
+            camera.tick(0.0)
+        controller = WalkController(
+            spec,
+            settings.gait,
+            initial_pose=PlanarPose(*terrain.start),
+            initial_height=height,
+            planner=planner,
+            feedback=None if settings.blind else settings.feedback,
+        )
+        graph = WalkingGraph.build(bus, backend, controller, command_timeout=command_timeout)
+        return cls(spec, settings, terrain, backend, bus, graph, camera, mapping)
+
+    def step(self, t: float, dt: float) -> None:
+        """One control tick at ``t``, the physics over ``dt``, and the camera if due [s]."""
+        self.graph.step(t, dt)
+        if self.camera is not None:
+            self.camera.tick(t + dt)
+
+    def close(self) -> None:
+        """Release the renderer."""
+        if self.camera is not None:
+            self.camera.close()
+
+    def result(self, task: TerrainTask, wall_seconds: float, scheduler: object) -> WalkResult:
+        """The record and metrics of the run so far, judged against the terrain's truth."""
+        spec, settings, terrain = self.spec, self.settings, self.terrain
+        log = self.graph.recorder.log
+        controller = self.graph.movement.controller
+        status = task.status
+        assert status is not None
+        base = settings.command
+        metrics = walk_metrics(
+            log,
+            commanded_speed_mps=base.speed,
+            wall_seconds=wall_seconds,
+            foot_radius=spec.foot_radius,
+            ground=terrain.height,
+            frozen_reason=status.frozen_reason,
+        )
+        final = log.array("body_position_in_world")[-1, :2]
+        goal = task.goal
+        extent = (-1.0, float(goal[0]) + 1.0, -1.5, 1.5)
+        truth = TrueScores(terrain, settings.map.resolution, settings.score, extent)
+        metrics.update(foothold_metrics(log, terrain, truth, spec.foot_radius))
+        metrics.update(
+            {
+                "reached_goal": bool(task.at_goal(final) and not metrics["fell"]),
+                "goal_distance_m": float(np.linalg.norm(goal - final)),
+                "footholds_adjusted": status.footholds_adjusted,
+                "frozen": status.state is GaitState.FROZEN,
+                "frozen_reason": status.frozen_reason,
+                "blind": settings.blind,
+                "robot": spec.name,
+                "terrain": terrain.name,
+                "gait": settings.gait.kind.value,
+                "seed": settings.seed,
+                "control_rate_hz": settings.control_rate_hz,
+                "commanded_body_height_m": base.body_height,
+                "stride_m": controller.config.stride,
+            }
+        )
+        if self.mapping is not None and self.camera is not None:
+            metrics.update(
+                {"frames": self.mapping.frames, **self.mapping.timing(), **self.camera.timing()}
+            )
+        if isinstance(scheduler, WallClockScheduler):
+            metrics.update(
+                {
+                    "control_overruns": scheduler.stats.overruns,
+                    "control_ticks_skipped": scheduler.stats.skipped,
+                    "control_max_late_s": scheduler.stats.max_late_s,
+                }
+            )
+        return WalkResult(
+            log=log,
+            metrics=metrics,
+            warnings=self.backend.warnings(),
+            terrain=terrain,
+            touchdowns=list(controller.touchdowns),
+            scores=self.mapping.scores if self.mapping is not None else None,
+        )
+
+
 def simulate_walk(
     spec: HexapodSpec,
     settings: WalkSettings,
@@ -237,34 +374,9 @@ def simulate_walk(
         The record, metrics and simulator warnings.
     """
     terrain = terrain or make_terrain(settings.terrain, seed=settings.seed)
-    camera_mount = None if settings.blind else settings.camera
-    backend = MujocoHexapod(spec, terrain, camera_mount, body_height=settings.command.body_height)
-    backend.advance(settings.settle_seconds)
     bus = bus if bus is not None else InProcessBus()
-    base = settings.command
-    planner = None
-    camera = mapping = None
-    if not settings.blind:
-        planner = TerrainPlanner(spec, settings.planner)
-        standing = backend.read()
-        assert standing.position_body_in_world is not None and standing.feet_in_world is not None
-        body = standing.position_body_in_world
-        mapping = MappingNode(bus, settings.map, settings.score, centre=(body[0], body[1]))
-        camera = SimCameraNode(bus, backend, settings.camera)
-        SimPoseNode(bus, camera)
-        ground = float(np.mean(standing.feet_in_world[:, 2])) - spec.foot_radius
-        bus.publish(GroundPrior.TOPIC, GroundPrior(0.0, body, ground, START_PRIOR_RADIUS))
-        camera.tick(0.0)
-    controller = WalkController(
-        spec,
-        settings.gait,
-        initial_pose=PlanarPose(*terrain.start),
-        initial_height=base.body_height,
-        planner=planner,
-        feedback=None if settings.blind else settings.feedback,
-    )
-    task = TerrainTask(bus, terrain, base, settings.stop_at_goal)
-    graph = WalkingGraph.build(bus, backend, controller)
+    robot = SimRobot.build(spec, settings, terrain, bus)
+    task = TerrainTask(bus, terrain, settings.command, settings.stop_at_goal)
     task.begin()
     scheduler = (
         WallClockScheduler(settings.control_rate_hz)
@@ -275,9 +387,7 @@ def simulate_walk(
 
     def tick(t: float) -> bool:
         task.command(t)
-        graph.step(t, dt)
-        if camera is not None:
-            camera.tick(t + dt)
+        robot.step(t, dt)
         if on_tick is not None:
             on_tick(t + dt)
         return task.should_stop(t + dt)
@@ -285,57 +395,5 @@ def simulate_walk(
     wall_start = time.perf_counter()
     scheduler.run(tick, settings.seconds)
     wall_seconds = time.perf_counter() - wall_start
-    if camera is not None:
-        camera.close()
-    log = graph.recorder.log
-    status = task.status
-    assert status is not None
-    metrics = walk_metrics(
-        log,
-        commanded_speed_mps=base.speed,
-        wall_seconds=wall_seconds,
-        foot_radius=spec.foot_radius,
-        ground=terrain.height,
-        frozen_reason=status.frozen_reason,
-    )
-    final = log.array("body_position_in_world")[-1, :2]
-    goal = task.goal
-    truth = TrueScores(
-        terrain, settings.map.resolution, settings.score, (-1.0, float(goal[0]) + 1.0, -1.5, 1.5)
-    )
-    metrics.update(foothold_metrics(log, terrain, truth, spec.foot_radius))
-    metrics.update(
-        {
-            "reached_goal": bool(task.at_goal(final) and not metrics["fell"]),
-            "goal_distance_m": float(np.linalg.norm(goal - final)),
-            "footholds_adjusted": status.footholds_adjusted,
-            "frozen": status.state is GaitState.FROZEN,
-            "frozen_reason": status.frozen_reason,
-            "blind": settings.blind,
-            "robot": spec.name,
-            "terrain": terrain.name,
-            "gait": settings.gait.kind.value,
-            "seed": settings.seed,
-            "control_rate_hz": settings.control_rate_hz,
-            "commanded_body_height_m": base.body_height,
-            "stride_m": controller.config.stride,
-        }
-    )
-    if mapping is not None and camera is not None:
-        metrics.update({"frames": mapping.frames, **mapping.timing(), **camera.timing()})
-    if isinstance(scheduler, WallClockScheduler):
-        metrics.update(
-            {
-                "control_overruns": scheduler.stats.overruns,
-                "control_ticks_skipped": scheduler.stats.skipped,
-                "control_max_late_s": scheduler.stats.max_late_s,
-            }
-        )
-    return WalkResult(
-        log=log,
-        metrics=metrics,
-        warnings=backend.warnings(),
-        terrain=terrain,
-        touchdowns=list(controller.touchdowns),
-        scores=mapping.scores if mapping is not None else None,
-    )
+    robot.close()
+    return robot.result(task, wall_seconds, scheduler)

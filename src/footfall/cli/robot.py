@@ -1,0 +1,113 @@
+"""``footfall robot``: the simulated hexapod as a robot on the network."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from rich.console import Console
+
+from footfall.cli.common import wrote
+
+
+def add_network_options(p: argparse.ArgumentParser, listen: list[str], connect: list[str]) -> None:
+    """The options of joining the zenoh network."""
+    p.add_argument(
+        "--listen",
+        action="append",
+        metavar="ENDPOINT",
+        help=f"zenoh endpoint to listen on (repeatable; default {', '.join(listen) or 'none'})",
+    )
+    p.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help=f"zenoh endpoint to connect to (repeatable; default {', '.join(connect) or 'none'})",
+    )
+    p.add_argument("--name", default="hexapod", help="robot name in the key expressions")
+    p.add_argument(
+        "--listen-remote",
+        action="store_true",
+        help="allow listening on addresses other than loopback (reachable from other machines)",
+    )
+    p.add_argument(
+        "--scouting", action="store_true", help="discover peers by multicast (off by default)"
+    )
+    p.add_argument(
+        "--zenoh-config",
+        type=Path,
+        help="zenoh configuration file (JSON5): TLS certificates, user/password authentication",
+    )
+    p.set_defaults(default_listen=listen, default_connect=connect)
+
+
+def network_config(args: argparse.Namespace):
+    """The zenoh settings the network options describe."""
+    from footfall.runtime.zenoh_bus import ZenohConfig
+
+    return ZenohConfig(
+        robot=args.name,
+        listen=tuple(args.listen if args.listen is not None else args.default_listen),
+        connect=tuple(args.connect if args.connect is not None else args.default_connect),
+        scouting=args.scouting,
+        allow_remote=args.listen_remote,
+        config_file=args.zenoh_config,
+    )
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``robot``."""
+    from footfall.runtime.zenoh_bus import DEFAULT_ENDPOINT
+    from footfall.sim.terrain import TERRAIN_NAMES
+
+    p = subparsers.add_parser(
+        "robot",
+        help="run the simulated hexapod as a robot on the network, driven by a base station",
+        description=(
+            "Run the hexapod's nodes (camera, pose, mapping, movement, servo) on the MuJoCo "
+            "robot, paced to the wall clock, and bridge them to a zenoh network: images, map, "
+            "pose, state, status and log go out; walk commands and the mode come in. Starts "
+            "in torque-off; stands still when the commands stop for 0.5 s. Ends on Ctrl-C, "
+            "after --seconds, after a fall or at the goal (--stop-at-goal), and writes "
+            "metrics.json, walk.png and footholds.png to --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("--sim", choices=TERRAIN_NAMES, default="stairs", help="terrain to stand on")
+    p.add_argument("--seed", type=int, default=0, help="seed of the terrain")
+    p.add_argument("--seconds", type=float, default=600.0, help="longest run in seconds")
+    p.add_argument("--stop-at-goal", action="store_true", help="end the run at the goal")
+    add_network_options(p, listen=[DEFAULT_ENDPOINT], connect=[])
+    p.add_argument("--out", type=Path, default=Path("footfall-out/robot"), help="output folder")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace, console: Console) -> int:
+    """Run the robot until it is stopped; write its record."""
+    from footfall.reports.robot import RobotRequest, run_robot_report
+    from footfall.reports.walk import WalkRequest
+
+    request = RobotRequest(
+        walk=WalkRequest(terrain=args.sim, seed=args.seed, seconds=args.seconds),
+        network=network_config(args),
+        seconds=args.seconds,
+        stop_at_goal=args.stop_at_goal,
+    )
+
+    def ready(bus) -> None:
+        where = ", ".join(bus.listening_locators()) or "nowhere (connecting only)"
+        console.print(
+            f"robot [bold]{args.name}[/] on {args.sim}: listening on {where}; "
+            f"keys {bus.prefix}/*; torque off until a station sends mode=walking",
+            highlight=False,
+        )
+
+    report = run_robot_report(request, on_ready=ready)
+    metrics = report.to_json()
+    console.print(
+        f"ran {metrics['sim_seconds']:.1f} s: distance {metrics['distance_m']:.2f} m, "
+        f"reached goal {metrics['reached_goal']}, fell {metrics['fell']}, "
+        f"invalid footholds {metrics['invalid_footholds']}"
+    )
+    wrote(console, report.write(args.out))
+    return 0

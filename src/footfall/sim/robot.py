@@ -1,0 +1,105 @@
+"""The simulated robot as a robot: its nodes on the network, driven by whoever connects.
+
+``footfall robot`` runs the hexapod's own nodes (camera, pose, mapping, movement, servo on
+the MuJoCo backend) paced to the wall clock, as the on-board computer would, and bridges
+them to the network bus: its images, map, pose, state, status and log go out; commands
+and the mode come in. It starts in torque-off and walks only while a station (or any
+client) keeps commanding it: the movement node's watchdog stands it still when the
+commands stop. The run ends when asked to, at the goal (``stop_at_goal``) or after a fall,
+and its record is judged against the terrain's truth like a simulated walk.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from footfall.nodes.movement import COMMAND_TIMEOUT_S
+from footfall.robot.spec import HexapodSpec
+from footfall.runtime.bridge import Bridge
+from footfall.runtime.bus import Bus, InProcessBus
+from footfall.runtime.scheduler import WallClockScheduler
+from footfall.sim.task import TerrainTask
+from footfall.sim.terrain import make_terrain
+from footfall.sim.walk import SimRobot, WalkResult, WalkSettings
+
+# What the robot sends out, and at most how often [Hz] (None: every message).
+OUTGOING: dict[str, float | None] = {
+    "depth": None,
+    "pose": None,
+    "map": 5.0,
+    "status": 20.0,
+    "state": 20.0,
+    "log": None,
+    "effector_targets": 20.0,
+    "joint_targets": 20.0,
+    "touchdown": None,
+}
+INCOMING = ("command", "mode")
+
+
+@dataclass(frozen=True)
+class RobotSettings:
+    """How the simulated robot runs.
+
+    Attributes:
+        walk: The simulation (terrain, camera, gait, seed; its command's body height and
+            speed are the robot's nominal ones).
+        seconds: Longest run [s] (wall clock).
+        stop_at_goal: End the run at the terrain's goal.
+        command_timeout: The watchdog's limit [s].
+        outgoing: Topics sent to the network with their largest rates [Hz].
+    """
+
+    walk: WalkSettings = field(default_factory=WalkSettings)
+    seconds: float = 600.0
+    stop_at_goal: bool = False
+    command_timeout: float = COMMAND_TIMEOUT_S
+    outgoing: dict[str, float | None] = field(default_factory=lambda: dict(OUTGOING))
+
+
+def run_robot(
+    spec: HexapodSpec,
+    settings: RobotSettings,
+    network: Bus,
+    on_tick: Callable[[float], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> tuple[WalkResult, Bridge]:
+    """Run the simulated robot on the network until done.
+
+    Args:
+        spec: The robot.
+        settings: How to run.
+        network: The network bus (a ZenohBus) the robot is bridged to.
+        on_tick: Called with the run time [s] after each tick.
+        should_stop: Ends the run when it returns True (a signal handler's flag).
+
+    Returns:
+        The record and metrics, and the bridge (its traffic counts).
+    """
+    walk = settings.walk
+    terrain = make_terrain(walk.terrain, seed=walk.seed)
+    local = InProcessBus()
+    robot = SimRobot.build(spec, walk, terrain, local, command_timeout=settings.command_timeout)
+    judge = TerrainTask(local, terrain, walk.command, settings.stop_at_goal, frozen_timeout=None)
+    bridge = Bridge(local, network, settings.outgoing, INCOMING)
+    scheduler = WallClockScheduler(walk.control_rate_hz)
+    dt = scheduler.period
+
+    def tick(t: float) -> bool:
+        bridge.spin()
+        robot.step(t, dt)
+        if on_tick is not None:
+            on_tick(t + dt)
+        return judge.should_stop(t + dt) or (should_stop is not None and should_stop())
+
+    wall_start = time.perf_counter()
+    try:
+        scheduler.run(tick, settings.seconds)
+    finally:
+        robot.close()
+    result = robot.result(judge, time.perf_counter() - wall_start, scheduler)
+    result.metrics["bridge_forwarded"] = dict(bridge.forwarded)
+    result.metrics["bridge_received"] = dict(bridge.received)
+    return result, bridge

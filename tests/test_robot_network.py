@@ -1,0 +1,158 @@
+"""`footfall robot` over a real zenoh session on loopback, driven from another process."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+
+from footfall.messages import (
+    DepthFrame,
+    EffectorTargets,
+    GaitState,
+    GaitStatus,
+    MapUpdate,
+    Mode,
+    ModeCommand,
+    RobotState,
+    WalkCommand,
+)
+from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
+from footfall.sim.task import TerrainTask
+from footfall.sim.terrain import make_terrain
+from test_zenoh_bus import free_port
+
+
+def start_robot(endpoint: str, terrain: str, out, seconds: float, *extra: str):
+    """`footfall robot` in its own process, listening on ``endpoint``."""
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    command = [sys.executable, "-m", "footfall.cli", "robot", "--sim", terrain]
+    command += ["--listen", endpoint, "--seconds", str(seconds), "--out", str(out), *extra]
+    return subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+
+
+class Observer:
+    """What a client hears from the robot."""
+
+    def __init__(self, bus: ZenohBus) -> None:
+        self.status: list[GaitStatus] = []
+        self.states: list[tuple[float, RobotState]] = []
+        self.targets: list[EffectorTargets] = []
+        self.depth = 0
+        self.maps = 0
+        bus.subscribe(GaitStatus.TOPIC, self.status.append)
+        bus.subscribe(RobotState.TOPIC, lambda m: self.states.append((time.monotonic(), m)))
+        bus.subscribe(EffectorTargets.TOPIC, self.targets.append)
+        bus.subscribe(DepthFrame.TOPIC, lambda m: setattr(self, "depth", self.depth + 1))
+        bus.subscribe(MapUpdate.TOPIC, lambda m: setattr(self, "maps", self.maps + 1))
+
+
+def wait_for(bus: ZenohBus, done, seconds: float) -> bool:
+    end = time.monotonic() + seconds
+    while not done():
+        if time.monotonic() > end:
+            return False
+        bus.spin(0.02)
+    return True
+
+
+def test_a_client_in_another_process_walks_the_robot_across_the_stairs(tmp_path):
+    """The robot, in its own process, starts limp; a client that only exchanges messages
+    with it receives its depth images, maps and status, switches it to walking and steers
+    it: the robot crosses the staircase with no invalid foothold and no fall."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    robot = start_robot(endpoint, "stairs", tmp_path, 150.0, "--stop-at-goal")
+    try:
+        with ZenohBus(ZenohConfig(connect=(endpoint,))) as bus:
+            seen = Observer(bus)
+            task = TerrainTask(bus, make_terrain("stairs", seed=0), WalkCommand(speed=0.1))
+            assert wait_for(bus, lambda: seen.status and seen.depth and seen.maps, 60.0)
+            assert seen.status[-1].mode is Mode.TORQUE_OFF
+            bus.publish(ModeCommand.TOPIC, ModeCommand(Mode.WALKING))
+            start = time.monotonic()
+            while robot.poll() is None and time.monotonic() - start < 120.0:
+                bus.spin(0.05)
+                task.command(time.monotonic() - start)  # 20 Hz, steered on the status
+            assert seen.status[-1].mode is Mode.WALKING
+    finally:
+        if robot.poll() is None:
+            robot.send_signal(signal.SIGINT)
+        output = robot.communicate(timeout=60)[0].decode(errors="replace")
+    assert robot.returncode == 0, output
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["reached_goal"], metrics
+    assert metrics["invalid_footholds"] == 0 and not metrics["fell"]
+    assert metrics["bridge_received"]["command"] > 100
+
+
+CLIENT = textwrap.dedent(
+    """
+    import sys, time
+    from footfall.messages import Mode, ModeCommand, WalkCommand
+    from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
+    bus = ZenohBus(ZenohConfig(connect=(sys.argv[1],)))
+    heard = []
+    bus.subscribe("status", heard.append)
+    while not heard:  # linked up: the robot is heard
+        bus.spin(0.05)
+    print("walking", flush=True)
+    k = 0
+    while True:  # until killed; the mode repeats as a heartbeat
+        if k % 20 == 0:
+            bus.publish("mode", ModeCommand(Mode.WALKING))
+        bus.publish("command", WalkCommand(speed=0.1))
+        bus.spin(0.05)
+        k += 1
+    """
+)
+
+
+def test_killing_the_client_mid_walk_stands_the_robot_still_and_a_new_one_resumes(tmp_path):
+    """A client walks the robot and is killed: within a second the robot stands still,
+    every foot down, without falling, and says why; a new client walks it on."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    robot = start_robot(endpoint, "flat", tmp_path, 60.0)
+    client = None
+    try:
+        with ZenohBus(ZenohConfig(connect=(endpoint,))) as bus:
+            seen = Observer(bus)
+            assert wait_for(bus, lambda: bool(seen.status), 60.0)
+            client = subprocess.Popen(
+                [sys.executable, "-c", CLIENT, endpoint], stdout=subprocess.PIPE, text=True
+            )
+            assert client.stdout.readline().strip() == "walking"
+            assert wait_for(bus, lambda: seen.status[-1].steps_taken >= 4, 30.0)
+            client.kill()
+            client.wait(timeout=10)
+            killed = time.monotonic()
+            wait_for(bus, lambda: False, 2.5)
+            after = [(t, s) for t, s in seen.states if t > killed + 1.0]
+            assert len(after) > 10
+            moved = np.ptp([s.position_body_in_world[:2] for _, s in after], axis=0)
+            assert np.hypot(*moved) < 0.003  # still from 1 s after the kill
+            assert not seen.targets[-1].swinging.any()
+            assert all(s.tilt < np.radians(10) for _, s in after)
+            status = seen.status[-1]
+            assert status.state is GaitState.REST and "no command" in status.frozen_reason
+            x_stopped = after[-1][1].position_body_in_world[0]
+            start = time.monotonic()
+            while time.monotonic() - start < 4.0:  # a new client
+                bus.publish(WalkCommand.TOPIC, WalkCommand(speed=0.1))
+                bus.spin(0.05)
+            assert seen.states[-1][1].position_body_in_world[0] > x_stopped + 0.1
+            assert seen.status[-1].frozen_reason == ""
+    finally:
+        if client is not None and client.poll() is None:
+            client.kill()
+        if robot.poll() is None:
+            robot.send_signal(signal.SIGINT)
+        output = robot.communicate(timeout=60)[0].decode(errors="replace")
+    assert robot.returncode == 0, output
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert not metrics["fell"]
