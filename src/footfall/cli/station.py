@@ -1,0 +1,51 @@
+"""``footfall station``: the operator's base station in the browser."""
+
+from __future__ import annotations
+
+import argparse
+
+from rich.console import Console
+
+from footfall.cli.robot import add_network_options, network_config
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``station``."""
+    from footfall.runtime.zenoh_bus import DEFAULT_ENDPOINT
+
+    p = subparsers.add_parser(
+        "station",
+        help="the base station: a browser page to watch and drive the robot",
+        description=(
+            "Connect to the robot's zenoh network and serve a page (viser) with its depth "
+            "image, height and score maps, pose, gait status, log and link state, and the "
+            "controls: mode (torque off / walking), direction, speed, body height, yaw rate, "
+            "and a goal clicked on the ground. Commands repeat as a heartbeat."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    add_network_options(p, listen=[], connect=[DEFAULT_ENDPOINT])
+    p.add_argument("--host", default="127.0.0.1", help="address the page is served on")
+    p.add_argument("--port", type=int, default=8080, help="port of the page")
+    p.add_argument("--seconds", type=float, default=None, help="stop after this long")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace, console: Console) -> int:
+    """Serve the station until Ctrl-C (or --seconds)."""
+    from footfall.runtime.zenoh_bus import ZenohBus
+    from footfall.station import Station
+
+    with ZenohBus(network_config(args)) as bus:
+        station = Station(bus, host=args.host, port=args.port)
+        console.print(
+            f"station for robot [bold]{args.name}[/] at http://{args.host}:{args.port}",
+            highlight=False,
+        )
+        try:
+            station.run(args.seconds)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            station.close()
+    return 0

@@ -1,0 +1,311 @@
+"""The base station (thesis H7.2): a browser page over the robot's messages, with viser.
+
+It shows what the robot sends, the depth image, the height and score maps (as images, and as
+a coloured 3-D surface with the robot's body, feet and footholds on it), the pose, the gait
+status (state, why it froze, which leg), the log, and the link (last message's age); and it
+sends the operator's mode and walk command, each on change and repeated at
+``HEARTBEAT_HZ`` as the robot's watchdog expects. A goal clicked on the ground is walked to:
+the station keeps pointing the command at it until the robot is there.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.messages import (
+    DepthFrame,
+    EffectorTargets,
+    GaitStatus,
+    LogLine,
+    MapUpdate,
+    Mode,
+    ModeCommand,
+    RobotState,
+    Touchdown,
+    WalkCommand,
+)
+from footfall.runtime.zenoh_bus import ZenohBus
+
+# Commands and the mode repeat this often [Hz]: well inside the robot's 0.5 s watchdog.
+HEARTBEAT_HZ = 5.0
+# Images and the 3-D map are redrawn at most this often [Hz].
+DRAW_HZ = 5.0
+# The link counts as up while the last message is younger than this [s].
+LINK_TIMEOUT_S = 1.0
+# A clicked goal counts as reached within this distance [m].
+GOAL_TOLERANCE_M = 0.1
+DIRECTIONS = {"forward": 0.0, "left": 90.0, "back": 180.0, "right": -90.0}
+
+
+def ground_point(origin: npt.ArrayLike, direction: npt.ArrayLike) -> tuple[float, float] | None:
+    """Where a view ray meets the ground plane z = 0, or None if it never does [m]."""
+    o, d = np.asarray(origin, dtype=np.float64), np.asarray(direction, dtype=np.float64)
+    if abs(d[2]) < 1e-9 or -o[2] / d[2] <= 0:
+        return None
+    p = o - o[2] / d[2] * d
+    return float(p[0]), float(p[1])
+
+
+def score_image(update: MapUpdate) -> npt.NDArray[np.uint8]:
+    """The score map as an RGB image, x right and y up: walkable dark, invalid red."""
+    score = np.nan_to_num(update.score, nan=0.0)
+    shade = (255 * (1.0 - np.clip(score / 0.5, 0.0, 1.0)) * 0.8).astype(np.uint8)
+    rgb = np.stack([shade, shade, shade], axis=-1)
+    rgb[~update.known] = (150, 150, 150)
+    rgb[update.known & ~update.valid] = (200, 40, 40)
+    return np.ascontiguousarray(rgb.transpose(1, 0, 2)[::-1])
+
+
+def depth_image(frame: DepthFrame, max_range: float = 3.0) -> npt.NDArray[np.uint8]:
+    """A depth image in grey levels, near bright, no return black."""
+    d = np.asarray(frame.depth, dtype=np.float64)
+    if frame.depth_scale is not None:
+        d = d * frame.depth_scale
+    grey = np.where(d > 0, 255 * (1.0 - np.clip(d / max_range, 0.0, 1.0)), 0.0)
+    return np.ascontiguousarray(np.repeat(grey.astype(np.uint8)[..., None], 3, axis=-1))
+
+
+def map_points(update: MapUpdate, step: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """Known cells as coloured points (every ``step``-th cell): green valid, red invalid."""
+    known = update.known[::step, ::step]
+    i, j = np.nonzero(known)
+    res = update.resolution
+    x = update.origin[0] + (i * step + 0.5) * res
+    y = update.origin[1] + (j * step + 0.5) * res
+    z = update.heights[::step, ::step][i, j]
+    valid = update.valid[::step, ::step][i, j]
+    colors = np.where(valid[:, None], [[60, 180, 90]], [[210, 50, 50]]).astype(np.uint8)
+    return np.column_stack([x, y, z]).astype(np.float32), colors
+
+
+class Station:
+    """The base station's page and its link to the robot.
+
+    Args:
+        bus: The network bus to the robot.
+        host: Address the page is served on.
+        port: Port of the page.
+    """
+
+    def __init__(self, bus: ZenohBus, host: str = "127.0.0.1", port: int = 8080) -> None:
+        import viser
+
+        self.bus = bus
+        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.mode = Mode.TORQUE_OFF
+        self.direction_deg = 0.0
+        self.speed = 0.0
+        self.goal: tuple[float, float] | None = None
+        self.last_heard = -math.inf
+        self.status: GaitStatus | None = None
+        self.state: RobotState | None = None
+        self.targets: EffectorTargets | None = None
+        self.depth: DepthFrame | None = None
+        self.map: MapUpdate | None = None
+        self.footholds: deque[np.ndarray] = deque(maxlen=120)
+        self.log: deque[str] = deque(maxlen=8)
+        self._dirty = True
+        self._next_beat = 0.0
+        self._next_draw = 0.0
+        self._build_page()
+        for topic, handler in (
+            (GaitStatus.TOPIC, self._on_status),
+            (RobotState.TOPIC, self._on_state),
+            (EffectorTargets.TOPIC, self._on_targets),
+            (DepthFrame.TOPIC, self._on_depth),
+            (MapUpdate.TOPIC, self._on_map),
+            (Touchdown.TOPIC, self._on_touchdown),
+            (LogLine.TOPIC, self._on_log),
+        ):
+            bus.subscribe(topic, handler)
+
+    # The page ----------------------------------------------------------------------------
+    def _build_page(self) -> None:
+        gui = self.server.gui
+        self.link_text = gui.add_markdown("**link:** waiting for the robot")
+        with gui.add_folder("mode"):
+            for label, mode in (("torque off", Mode.TORQUE_OFF), ("walking", Mode.WALKING)):
+                button = gui.add_button(label)
+                button.on_click(lambda _event, mode=mode: self._set_mode(mode))
+        with gui.add_folder("walk"):
+            for label, degrees in DIRECTIONS.items():
+                button = gui.add_button(label)
+                button.on_click(lambda _event, d=degrees: self._set_direction(d))
+            gui.add_button("stop").on_click(lambda _event: self._stop())
+            self.speed_slider = gui.add_slider("speed [m/s]", 0.0, 0.2, 0.01, 0.1)
+            self.height_slider = gui.add_slider("body height [m]", 0.06, 0.14, 0.005, 0.09)
+            self.yaw_slider = gui.add_slider("yaw rate [rad/s]", -0.5, 0.5, 0.05, 0.0)
+            for slider in (self.speed_slider, self.height_slider, self.yaw_slider):
+                slider.on_update(lambda _event: self._changed())
+        self.status_text = gui.add_markdown("**status:** -")
+        self.pose_text = gui.add_markdown("**pose:** -")
+        self.depth_image = gui.add_image(np.zeros((24, 32, 3), np.uint8), label="depth")
+        self.score_image = gui.add_image(np.zeros((32, 32, 3), np.uint8), label="score map")
+        self.log_text = gui.add_markdown("**log:** -")
+        self.server.scene.add_grid("/ground", width=6.0, height=6.0, position=(2.0, 0.0, 0.0))
+
+        @self.server.scene.on_click()
+        def clicked(event) -> None:
+            point = ground_point(event.ray_origin, event.ray_direction)
+            if point is not None:
+                self.set_goal(point)
+
+    def _set_mode(self, mode: Mode) -> None:
+        self.mode = mode
+        self._changed()
+
+    def _set_direction(self, degrees: float) -> None:
+        self.goal = None
+        self.direction_deg = degrees
+        self.speed = float(self.speed_slider.value)
+        self._changed()
+
+    def _stop(self) -> None:
+        self.goal = None
+        self.speed = 0.0
+        self._changed()
+
+    def set_goal(self, xy: tuple[float, float]) -> None:
+        """Walk to a point on the ground (map frame) [m]."""
+        self.goal = xy
+        self.server.scene.add_icosphere(
+            "/goal", radius=0.03, color=(250, 200, 0), position=(xy[0], xy[1], 0.02)
+        )
+        self._changed()
+
+    def _changed(self) -> None:
+        self._dirty = True
+
+    # What the robot says -----------------------------------------------------------------
+    def _heard(self) -> None:
+        self.last_heard = time.monotonic()
+
+    def _on_status(self, m: GaitStatus) -> None:
+        self._heard()
+        self.status = m
+
+    def _on_state(self, m: RobotState) -> None:
+        self._heard()
+        self.state = m
+
+    def _on_targets(self, m: EffectorTargets) -> None:
+        self.targets = m
+
+    def _on_depth(self, m: DepthFrame) -> None:
+        self._heard()
+        self.depth = m
+
+    def _on_map(self, m: MapUpdate) -> None:
+        self.map = m
+
+    def _on_touchdown(self, m: Touchdown) -> None:
+        self.footholds.append(np.asarray(m.chosen_in_world, dtype=np.float32))
+
+    def _on_log(self, m: LogLine) -> None:
+        self.log.append(f"`{m.stamp:8.2f}` {m.node} {m.level}: {m.text}")
+
+    # The loop ----------------------------------------------------------------------------
+    def command(self) -> WalkCommand:
+        """The walk command the controls (or the goal) ask for now."""
+        height = float(self.height_slider.value)
+        yaw_rate = float(self.yaw_slider.value)
+        if self.goal is not None and self.status is not None:
+            pose = self.status.body_pose
+            dx, dy = self.goal[0] - pose.x, self.goal[1] - pose.y
+            if math.hypot(dx, dy) < GOAL_TOLERANCE_M:
+                self.goal = None
+                return WalkCommand(speed=0.0, body_height=height)
+            c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+            direction = (c * dx + s * dy, -s * dx + c * dy)
+            speed = float(self.speed_slider.value) or 0.1
+            return WalkCommand(direction, speed, height, yaw_rate)
+        a = math.radians(self.direction_deg)
+        return WalkCommand((math.cos(a), math.sin(a)), self.speed, height, yaw_rate)
+
+    def step(self) -> None:
+        """Take in what arrived, send the command (changed or due) and redraw the page."""
+        self.bus.spin()
+        now = time.monotonic()
+        if self._dirty or now >= self._next_beat or self.goal is not None:
+            stamp = time.time()
+            self.bus.publish(ModeCommand.TOPIC, ModeCommand(self.mode, stamp))
+            command = self.command()
+            self.bus.publish(
+                WalkCommand.TOPIC,
+                WalkCommand(
+                    command.direction,
+                    command.speed,
+                    command.body_height,
+                    command.yaw_rate,
+                    stamp,
+                ),
+            )
+            self._dirty = False
+            self._next_beat = now + 1.0 / HEARTBEAT_HZ
+        if now >= self._next_draw:
+            self._draw(now)
+            self._next_draw = now + 1.0 / DRAW_HZ
+
+    def _draw(self, now: float) -> None:
+        age = now - self.last_heard
+        up = age < LINK_TIMEOUT_S
+        self.link_text.content = (
+            f"**link:** {'connected' if up else 'lost'}, last message "
+            + (f"{age:.2f} s ago" if math.isfinite(age) else "never")
+            + f"; sending **{self.mode.value}**"
+        )
+        if self.status is not None:
+            s = self.status
+            why = f", **{s.frozen_reason}**" if s.frozen_reason else ""
+            leg = f" (leg {s.frozen_leg})" if s.frozen_leg else ""
+            self.status_text.content = (
+                f"**status:** {s.mode.value}, {s.state.value}{why}{leg}; "
+                f"{s.steps_taken} steps, {s.footholds_adjusted} footholds adjusted"
+            )
+            p = s.body_pose
+            self.pose_text.content = (
+                f"**pose:** x {p.x:.3f} m, y {p.y:.3f} m, yaw {math.degrees(p.yaw):.1f} deg, "
+                f"body z {s.body_z:.3f} m"
+            )
+        if self.log:
+            self.log_text.content = "**log:**\n\n" + "\n\n".join(self.log)
+        scene = self.server.scene
+        if self.depth is not None:
+            self.depth_image.image = depth_image(self.depth)
+        if self.map is not None:
+            self.score_image.image = score_image(self.map)
+            points, colors = map_points(self.map)
+            scene.add_point_cloud("/map", points, colors, point_size=0.03)
+        if self.state is not None and self.status is not None:
+            p = self.status.body_pose
+            q = self.state.orientation_body_in_world.as_quat()  # x, y, z, w
+            scene.add_box(
+                "/robot/body",
+                color=(80, 120, 220),
+                dimensions=(0.26, 0.16, 0.05),
+                position=(p.x, p.y, self.status.body_z),
+                wxyz=(q[3], q[0], q[1], q[2]),
+            )
+        if self.targets is not None:
+            feet = np.asarray(self.targets.feet_in_world, dtype=np.float32)
+            colors = np.where(self.targets.swinging[:, None], [[250, 160, 0]], [[20, 20, 20]])
+            scene.add_point_cloud("/robot/feet", feet, colors.astype(np.uint8), point_size=0.04)
+        if self.footholds:
+            holds = np.stack(self.footholds)
+            scene.add_point_cloud("/footholds", holds, (0, 220, 0), point_size=0.025)
+
+    def run(self, seconds: float | None = None, rate_hz: float = 50.0) -> None:
+        """Serve the page and keep the link until the time is up (forever by default)."""
+        end = math.inf if seconds is None else time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.step()
+            self.bus.spin(1.0 / rate_hz)
+
+    def close(self) -> None:
+        """Stop serving the page."""
+        self.server.stop()

@@ -1,0 +1,129 @@
+"""The base station in a real headless browser, driving `footfall robot` over zenoh."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from test_robot_network import start_robot
+from test_zenoh_bus import free_port
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+# Headless Chromium renders viser's WebGL scene here in software.
+CHROMIUM_ARGS = [
+    "--headless=new",
+    "--no-sandbox",
+    "--use-gl=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--no-first-run",
+]
+
+
+def _pose_x(text: str) -> float:
+    match = re.search(r"pose: x (-?[\d.]+) m", text)
+    assert match, text
+    return float(match.group(1))
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (.ci/run does)")
+def test_the_station_page_shows_the_robot_and_drives_it(tmp_path):
+    """Chromium opens the station: it shows the link, the status and the score map; a click
+    on "walking" and one on "forward" make the robot walk (its pose changes on the page)."""
+    from playwright.sync_api import sync_playwright
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    port = free_port()
+    robot = start_robot(endpoint, "flat", tmp_path / "robot", 90.0)
+    env = {**os.environ}
+    station = subprocess.Popen(
+        [sys.executable, "-m", "footfall.cli", "station", "--connect", endpoint]
+        + ["--port", str(port), "--seconds", "80"],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+    )
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            page = browser.new_page(viewport={"width": 1400, "height": 900})
+            end = time.monotonic() + 60.0
+            while True:  # the station serves once it has started
+                try:
+                    page.goto(f"http://127.0.0.1:{port}", timeout=5000)
+                    break
+                except Exception:
+                    assert time.monotonic() < end, "the station never served its page"
+                    time.sleep(1.0)
+            page.get_by_text("link: connected").wait_for(timeout=60000)
+            page.get_by_text("status: torque_off").wait_for(timeout=30000)
+            assert page.get_by_text("score map").count() >= 1
+            before = _pose_x(page.inner_text("body"))
+            page.get_by_role("button", name="walking").click()
+            page.get_by_role("button", name="forward").click()
+            page.get_by_text("status: walking, stepping").wait_for(timeout=20000)
+            page.wait_for_timeout(6000)
+            after = _pose_x(page.inner_text("body"))
+            page.screenshot(path=str(tmp_path / "station.png"))
+            browser.close()
+        assert after > before + 0.15, (before, after)
+        assert (tmp_path / "station.png").stat().st_size > 10_000
+    finally:
+        station.send_signal(signal.SIGINT)
+        robot.send_signal(signal.SIGINT)
+        station.wait(timeout=30)
+        robot.wait(timeout=60)
+
+
+def test_the_station_walks_to_a_clicked_goal_and_beats_its_heart():
+    """A goal is turned into a walk command in the body frame, a standstill once reached;
+    the mode and the command go out at once on a change and then as a heartbeat."""
+    import math
+
+    from footfall.messages import GaitState, GaitStatus, Mode
+    from footfall.robot.planar import PlanarPose
+    from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
+    from footfall.station import HEARTBEAT_HZ, Station
+
+    with ZenohBus(ZenohConfig()) as bus:
+        station = Station(bus, port=free_port())
+        try:
+            facing_left = PlanarPose(0.0, 0.0, math.pi / 2)
+            station.status = GaitStatus(
+                0.0, Mode.WALKING, GaitState.REST, "", "", facing_left, 0.09, 0, 0, 0.0
+            )
+            station.set_goal((1.0, 0.0))
+            command = station.command()
+            assert command.speed > 0
+            assert command.direction[0] == pytest.approx(0.0, abs=1e-9)
+            assert command.direction[1] == pytest.approx(-1.0)  # the goal is on its right
+            station.status = GaitStatus(
+                1.0, Mode.WALKING, GaitState.REST, "", "", PlanarPose(0.95, 0.0), 0.09, 0, 0, 0.0
+            )
+            assert station.command().speed == 0.0 and station.goal is None
+            start = time.monotonic()
+            while time.monotonic() - start < 1.0:
+                station.step()
+                time.sleep(0.01)
+            sent = bus.stats["command"].messages
+            assert HEARTBEAT_HZ - 1 <= sent <= HEARTBEAT_HZ + 2
+            assert bus.stats["mode"].messages == sent
+        finally:
+            station.close()
+
+
+def test_a_click_meets_the_ground_where_the_ray_does():
+    """The goal of a click is the view ray's crossing of z = 0; a ray up or level has none."""
+    from footfall.station import ground_point
+
+    assert ground_point((0.0, 0.0, 2.0), (1.0, 0.5, -1.0)) == pytest.approx((2.0, 1.0))
+    assert ground_point((0.0, 0.0, 2.0), (1.0, 0.0, 0.5)) is None
+    assert ground_point((0.0, 0.0, 2.0), (1.0, 0.0, 0.0)) is None
