@@ -77,6 +77,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the terrain")
     p.add_argument("--seconds", type=float, default=600.0, help="longest run in seconds")
     p.add_argument("--stop-at-goal", action="store_true", help="end the run at the goal")
+    p.add_argument(
+        "--rate",
+        action="append",
+        default=[],
+        metavar="TOPIC=HZ",
+        help="largest rate a topic is sent out at (HZ 'all' for every message); repeatable",
+    )
     add_network_options(p, listen=[DEFAULT_ENDPOINT], connect=[])
     p.add_argument("--out", type=Path, default=Path("footfall-out/robot"), help="output folder")
     p.set_defaults(handler=run)
@@ -84,14 +91,26 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace, console: Console) -> int:
     """Run the robot until it is stopped; write its record."""
+    from footfall.errors import ConfigError
     from footfall.reports.robot import RobotRequest, run_robot_report
     from footfall.reports.walk import WalkRequest
+    from footfall.sim.robot import OUTGOING
 
+    rates: dict[str, float | None] = {}
+    for item in args.rate:
+        topic, _, value = item.partition("=")
+        if topic not in OUTGOING or not value:
+            raise ConfigError(f"--rate {item!r}: use TOPIC=HZ, TOPIC one of {', '.join(OUTGOING)}")
+        try:
+            rates[topic] = None if value == "all" else float(value)
+        except ValueError as exc:
+            raise ConfigError(f"--rate {item!r}: {value!r} is not a rate in Hz or 'all'") from exc
     request = RobotRequest(
         walk=WalkRequest(terrain=args.sim, seed=args.seed, seconds=args.seconds),
         network=network_config(args),
         seconds=args.seconds,
         stop_at_goal=args.stop_at_goal,
+        rates=rates,
     )
 
     def ready(bus) -> None:

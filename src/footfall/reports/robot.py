@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 from footfall.reports.walk import WalkReport, WalkRequest, prepare_walk
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
-from footfall.sim.robot import RobotSettings, run_robot
+from footfall.sim.robot import OUTGOING, RobotSettings, run_robot
 
 
 @dataclass(frozen=True)
@@ -20,12 +20,15 @@ class RobotRequest:
         network: How to join the network.
         seconds: Longest run [s].
         stop_at_goal: End at the terrain's goal.
+        rates: Largest rates [Hz] of the topics sent out, overriding the defaults (None:
+            every message).
     """
 
     walk: WalkRequest = field(default_factory=WalkRequest)
     network: ZenohConfig = field(default_factory=ZenohConfig)
     seconds: float = 600.0
     stop_at_goal: bool = False
+    rates: dict[str, float | None] = field(default_factory=dict)
 
 
 def run_robot_report(
@@ -52,7 +55,10 @@ def run_robot_report(
             if on_ready is not None:
                 on_ready(network)
             settings = RobotSettings(
-                walk=job.settings, seconds=request.seconds, stop_at_goal=request.stop_at_goal
+                walk=job.settings,
+                seconds=request.seconds,
+                stop_at_goal=request.stop_at_goal,
+                outgoing={**OUTGOING, **request.rates},
             )
             result, _ = run_robot(
                 job.spec, settings, network, on_tick=on_tick, should_stop=lambda: stop["asked"]

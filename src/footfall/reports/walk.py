@@ -154,6 +154,8 @@ class WalkReport:
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "metrics.json", out / "walk.png", out / "footholds.png"]
         write_json(paths[0], self.to_json())
+        if not result.log.time:  # nothing walked, nothing to draw
+            return paths[:1]
         r = job.request
         title = f"{job.spec.name}: {r.gait} gait at {job.speed:.3f} m/s on {r.terrain} terrain"
         plot_walk(

@@ -129,6 +129,7 @@ class ZenohBus:
         self.prefix = f"{KEY_PREFIX}/{self.config.robot}"
         self.session = zenoh.open(self.config.zenoh_config())
         self.stats: dict[str, TopicStats] = defaultdict(TopicStats)
+        self.received: dict[str, TopicStats] = defaultdict(TopicStats)
         self._counts = _Counts()
         self._inbox: queue.SimpleQueue = queue.SimpleQueue()
         self._publishers: dict[str, zenoh.Publisher] = {}
@@ -225,6 +226,9 @@ class ZenohBus:
         if kind == "query":
             self._answer(name, payload)
             return
+        received = self.received[name]
+        received.messages += 1
+        received.bytes += len(payload)
         try:
             message = decode(payload)
         except MessageError as exc:

@@ -298,6 +298,23 @@ class SimRobot:
         status = task.status
         assert status is not None
         base = settings.command
+        if not log.time:  # never walked (a robot left in torque-off)
+            metrics: dict[str, object] = {
+                "walked": False,
+                "sim_seconds": 0.0,
+                "wall_seconds": wall_seconds,
+                "distance_m": 0.0,
+                "fell": False,
+                "reached_goal": False,
+                "invalid_footholds": 0,
+                "touchdowns": 0,
+                "frozen": False,
+                "frozen_reason": "",
+                "robot": spec.name,
+                "terrain": terrain.name,
+                "seed": settings.seed,
+            }
+            return WalkResult(log, metrics, self.backend.warnings(), terrain, [], None)
         metrics = walk_metrics(
             log,
             commanded_speed_mps=base.speed,
