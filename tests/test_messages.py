@@ -12,6 +12,8 @@ from scipy.spatial.transform import Rotation
 
 from footfall.errors import MessageError
 from footfall.messages import (
+    Ack,
+    BipedPlan,
     DepthFrame,
     EffectorTargets,
     GaitState,
@@ -22,9 +24,13 @@ from footfall.messages import (
     MapUpdate,
     Mode,
     ModeCommand,
+    NewMap,
+    Obstacles,
+    PlanningGoal,
     PoseEstimate,
     RobotState,
     Touchdown,
+    Trigger,
     WalkCommand,
     decode,
     message_types,
@@ -121,6 +127,20 @@ def examples(rng: np.random.Generator) -> list:
         ),
         Touchdown(4.5, 2, rng.normal(size=3), rng.normal(size=3)),
         LogLine(5.0, "mapping", "warning", "depth frame 3: skipped — no pose ✓"),
+        Obstacles(1.0, rng.normal(size=4), rng.normal(size=4), rng.uniform(0.1, 1, 4)),
+        BipedPlan(
+            2.0,
+            rng.normal(size=(3, 2)),
+            rng.normal(size=(7, 3)),
+            rng.normal(size=7) > 0,
+            rng.normal(size=(50, 2)),
+            4.2,
+            0,
+        ),
+        PlanningGoal(3.0, -1.0),
+        NewMap(rng.normal(size=3), rng.normal(size=3), 0.25),
+        Trigger(1.0),
+        Ack(False, "the goal lies inside an obstacle"),
     ]
 
 

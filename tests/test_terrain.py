@@ -93,7 +93,7 @@ def test_true_scores_see_what_a_perfect_camera_would():
     the grid falls; a stone's middle is valid; stones whose edges lie on cell centres give
     symmetric valid cores."""
     from footfall.scoring.walkability import ScoreConfig
-    from footfall.sim.walk import TrueScores
+    from footfall.sim.truth import TrueScores
 
     narrow = Cobblestones(groove=0.01, jitter=0.0, seed=0)
     truth = TrueScores(narrow, 0.02, ScoreConfig(), (0.0, 3.2, -0.8, 0.8))

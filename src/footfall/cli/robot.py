@@ -8,6 +8,7 @@ from pathlib import Path
 from rich.console import Console
 
 from footfall.cli.common import wrote
+from footfall.errors import ConfigError
 
 
 def add_network_options(p: argparse.ArgumentParser, listen: list[str], connect: list[str]) -> None:
@@ -84,20 +85,40 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="TOPIC=HZ",
         help="largest rate a topic is sent out at (HZ 'all' for every message); repeatable",
     )
+    biped = p.add_argument_group("biped (no body yet: its vision and planning node)")
+    biped.add_argument(
+        "--biped",
+        action="store_true",
+        help="serve the biped's services (start_capture, stop_capture, start_planning, "
+        "new_map, clear) instead of simulating the hexapod",
+    )
+    source = biped.add_mutually_exclusive_group()
+    source.add_argument("--case", type=int, help="what the capture sees: a dissertation map")
+    source.add_argument("--map", type=Path, help="what the capture sees: a map file")
+    source.add_argument("--cloud", type=Path, help="what the capture sees: a point cloud")
     add_network_options(p, listen=[DEFAULT_ENDPOINT], connect=[])
     p.add_argument("--out", type=Path, default=Path("footfall-out/robot"), help="output folder")
     p.set_defaults(handler=run)
 
 
-def run(args: argparse.Namespace, console: Console) -> int:
-    """Run the robot until it is stopped; write its record."""
-    from footfall.errors import ConfigError
-    from footfall.reports.robot import RobotRequest, run_robot_report
-    from footfall.reports.walk import WalkRequest
+def _ready(console: Console, args: argparse.Namespace, what: str):
+    """Say where the robot listens, once its network bus is open."""
+
+    def ready(bus) -> None:
+        where = ", ".join(bus.listening_locators()) or "nowhere (connecting only)"
+        console.print(
+            f"robot [bold]{args.name}[/] ({what}): listening on {where}; keys {bus.prefix}/*",
+            highlight=False,
+        )
+
+    return ready
+
+
+def _rates(items: list[str]) -> dict[str, float | None]:
     from footfall.sim.robot import OUTGOING
 
     rates: dict[str, float | None] = {}
-    for item in args.rate:
+    for item in items:
         topic, _, value = item.partition("=")
         if topic not in OUTGOING or not value:
             raise ConfigError(f"--rate {item!r}: use TOPIC=HZ, TOPIC one of {', '.join(OUTGOING)}")
@@ -105,22 +126,35 @@ def run(args: argparse.Namespace, console: Console) -> int:
             rates[topic] = None if value == "all" else float(value)
         except ValueError as exc:
             raise ConfigError(f"--rate {item!r}: {value!r} is not a rate in Hz or 'all'") from exc
+    return rates
+
+
+def run(args: argparse.Namespace, console: Console) -> int:
+    """Run the robot until it is stopped; write its record."""
+    from footfall.reports.robot import BipedRequest, RobotRequest, run_biped, run_robot_report
+    from footfall.reports.walk import WalkRequest
+
+    if args.biped:
+        request = BipedRequest(
+            case=args.case,
+            map=args.map,
+            cloud=args.cloud,
+            network=network_config(args),
+            seconds=args.seconds,
+        )
+        served = run_biped(request, on_ready=_ready(console, args, "biped planning"))
+        console.print(f"served {', '.join(served['services'])} on {served['map']}")
+        return 0
+    if args.case is not None or args.map is not None or args.cloud is not None:
+        raise ConfigError("--case, --map and --cloud go with --biped")
     request = RobotRequest(
         walk=WalkRequest(terrain=args.sim, seed=args.seed, seconds=args.seconds),
         network=network_config(args),
         seconds=args.seconds,
         stop_at_goal=args.stop_at_goal,
-        rates=rates,
+        rates=_rates(args.rate),
     )
-
-    def ready(bus) -> None:
-        where = ", ".join(bus.listening_locators()) or "nowhere (connecting only)"
-        console.print(
-            f"robot [bold]{args.name}[/] on {args.sim}: listening on {where}; "
-            f"keys {bus.prefix}/*; torque off until a station sends mode=walking",
-            highlight=False,
-        )
-
+    ready = _ready(console, args, f"hexapod on {args.sim}; torque off until mode=walking")
     report = run_robot_report(request, on_ready=ready)
     metrics = report.to_json()
     console.print(

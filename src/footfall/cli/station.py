@@ -28,6 +28,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--host", default="127.0.0.1", help="address the page is served on")
     p.add_argument("--port", type=int, default=8080, help="port of the page")
     p.add_argument("--seconds", type=float, default=None, help="stop after this long")
+    p.add_argument(
+        "--biped",
+        action="store_true",
+        help="the biped's station: capture and clear buttons, obstacles, path, footsteps and "
+        "COM, and a clicked goal planned to (start_planning)",
+    )
     p.set_defaults(handler=run)
 
 
@@ -37,7 +43,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from footfall.station import Station
 
     with ZenohBus(network_config(args)) as bus:
-        station = Station(bus, host=args.host, port=args.port)
+        station = Station(bus, host=args.host, port=args.port, biped=args.biped)
         console.print(
             f"station for robot [bold]{args.name}[/] at http://{args.host}:{args.port}",
             highlight=False,

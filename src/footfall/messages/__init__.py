@@ -1,5 +1,11 @@
 """Messages between footfall's nodes, and their byte encoding."""
 
+from footfall.messages.biped import Ack as Ack
+from footfall.messages.biped import BipedPlan as BipedPlan
+from footfall.messages.biped import NewMap as NewMap
+from footfall.messages.biped import Obstacles as Obstacles
+from footfall.messages.biped import PlanningGoal as PlanningGoal
+from footfall.messages.biped import Trigger as Trigger
 from footfall.messages.codec import Message as Message
 from footfall.messages.codec import decode as decode
 from footfall.messages.codec import message_types as message_types
@@ -19,6 +25,8 @@ from footfall.messages.types import Touchdown as Touchdown
 from footfall.messages.types import WalkCommand as WalkCommand
 
 __all__ = [
+    "Ack",
+    "BipedPlan",
     "DepthFrame",
     "EffectorTargets",
     "GaitState",
@@ -30,9 +38,13 @@ __all__ = [
     "Message",
     "Mode",
     "ModeCommand",
+    "NewMap",
+    "Obstacles",
+    "PlanningGoal",
     "PoseEstimate",
     "RobotState",
     "Touchdown",
+    "Trigger",
     "WalkCommand",
     "decode",
     "message_types",

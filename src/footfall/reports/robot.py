@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import signal
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from footfall.reports.walk import WalkReport, WalkRequest, prepare_walk
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
@@ -67,3 +69,67 @@ def run_robot_report(
         for s, handler in previous.items():
             signal.signal(s, handler)
     return WalkReport(job, result)
+
+
+@dataclass(frozen=True)
+class BipedRequest:
+    """What ``footfall robot --biped`` serves.
+
+    Attributes:
+        case: One of the dissertation's maps as what the capture sees, or None.
+        map: A map file as what the capture sees, or None.
+        cloud: A point cloud whose detected obstacles the capture sees, or None.
+        network: How to join the network.
+        seconds: Longest run [s].
+    """
+
+    case: int | None = None
+    map: Path | None = None
+    cloud: Path | None = None
+    network: ZenohConfig = field(default_factory=ZenohConfig)
+    seconds: float = 600.0
+
+
+def run_biped(
+    request: BipedRequest,
+    on_ready: Callable[[ZenohBus], None] | None = None,
+    rate_hz: float = 10.0,
+) -> dict[str, object]:
+    """Serve the biped's planning node until the time is up or SIGINT/SIGTERM.
+
+    Returns:
+        What was served: the services and how many obstacles the capture sees.
+    """
+    from footfall.biped.maps import dissertation_map, load_map
+    from footfall.nodes.biped_planning import SERVICES, BipedPlanningNode
+
+    if request.cloud is not None:
+        from footfall.reports.biped import CloudRequest, detect
+
+        circles, start, name = detect(CloudRequest(request.cloud)).circles, (0.0, 0.0), "cloud"
+    else:
+        plan_map = (
+            load_map(request.map)
+            if request.map is not None
+            else dissertation_map(request.case or 1)
+        )
+        circles, start, name = plan_map.obstacles, plan_map.start, plan_map.name
+    stop = {"asked": False}
+
+    def ask_to_stop(signum: int, frame: object) -> None:
+        stop["asked"] = True
+
+    previous = {s: signal.signal(s, ask_to_stop) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        with ZenohBus(request.network) as network:
+            node = BipedPlanningNode(network, circles, start, name)
+            if on_ready is not None:
+                on_ready(network)
+            end = time.monotonic() + request.seconds
+            while not stop["asked"] and time.monotonic() < end:
+                network.spin(1.0 / rate_hz)
+                node.tick()
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    return {"services": list(SERVICES), "obstacles_in_view": len(circles), "map": name}

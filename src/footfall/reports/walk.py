@@ -13,7 +13,8 @@ from footfall.reports import write_json
 from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.sim.model import CameraMount
 from footfall.sim.terrain import Terrain, make_terrain
-from footfall.sim.walk import TrueScores, WalkResult, WalkSettings, simulate_walk
+from footfall.sim.truth import TrueScores
+from footfall.sim.walk import WalkResult, WalkSettings, simulate_walk
 
 # The walk's default speed [m/s], lowered to 3/4 of the gait's top speed where that is less.
 DEFAULT_SPEED_MPS = 0.10

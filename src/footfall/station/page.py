@@ -15,21 +15,37 @@ import time
 from collections import deque
 
 import numpy as np
-import numpy.typing as npt
 
+from footfall.biped.planner import FOOT_LENGTH, FOOT_WIDTH
+from footfall.errors import FootfallError
 from footfall.messages import (
+    Ack,
+    BipedPlan,
     DepthFrame,
     EffectorTargets,
     GaitStatus,
     LogLine,
     MapUpdate,
+    Message,
     Mode,
     ModeCommand,
+    Obstacles,
+    PlanningGoal,
     RobotState,
     Touchdown,
+    Trigger,
     WalkCommand,
 )
 from footfall.runtime.zenoh_bus import ZenohBus
+from footfall.station.views import (
+    circles_segments,
+    depth_image,
+    feet_segments,
+    ground_point,
+    map_points,
+    polyline_segments,
+    score_image,
+)
 
 # Commands and the mode repeat this often [Hz]: well inside the robot's 0.5 s watchdog.
 HEARTBEAT_HZ = 5.0
@@ -42,47 +58,6 @@ GOAL_TOLERANCE_M = 0.1
 DIRECTIONS = {"forward": 0.0, "left": 90.0, "back": 180.0, "right": -90.0}
 
 
-def ground_point(origin: npt.ArrayLike, direction: npt.ArrayLike) -> tuple[float, float] | None:
-    """Where a view ray meets the ground plane z = 0, or None if it never does [m]."""
-    o, d = np.asarray(origin, dtype=np.float64), np.asarray(direction, dtype=np.float64)
-    if abs(d[2]) < 1e-9 or -o[2] / d[2] <= 0:
-        return None
-    p = o - o[2] / d[2] * d
-    return float(p[0]), float(p[1])
-
-
-def score_image(update: MapUpdate) -> npt.NDArray[np.uint8]:
-    """The score map as an RGB image, x right and y up: walkable dark, invalid red."""
-    score = np.nan_to_num(update.score, nan=0.0)
-    shade = (255 * (1.0 - np.clip(score / 0.5, 0.0, 1.0)) * 0.8).astype(np.uint8)
-    rgb = np.stack([shade, shade, shade], axis=-1)
-    rgb[~update.known] = (150, 150, 150)
-    rgb[update.known & ~update.valid] = (200, 40, 40)
-    return np.ascontiguousarray(rgb.transpose(1, 0, 2)[::-1])
-
-
-def depth_image(frame: DepthFrame, max_range: float = 3.0) -> npt.NDArray[np.uint8]:
-    """A depth image in grey levels, near bright, no return black."""
-    d = np.asarray(frame.depth, dtype=np.float64)
-    if frame.depth_scale is not None:
-        d = d * frame.depth_scale
-    grey = np.where(d > 0, 255 * (1.0 - np.clip(d / max_range, 0.0, 1.0)), 0.0)
-    return np.ascontiguousarray(np.repeat(grey.astype(np.uint8)[..., None], 3, axis=-1))
-
-
-def map_points(update: MapUpdate, step: int = 2) -> tuple[np.ndarray, np.ndarray]:
-    """Known cells as coloured points (every ``step``-th cell): green valid, red invalid."""
-    known = update.known[::step, ::step]
-    i, j = np.nonzero(known)
-    res = update.resolution
-    x = update.origin[0] + (i * step + 0.5) * res
-    y = update.origin[1] + (j * step + 0.5) * res
-    z = update.heights[::step, ::step][i, j]
-    valid = update.valid[::step, ::step][i, j]
-    colors = np.where(valid[:, None], [[60, 180, 90]], [[210, 50, 50]]).astype(np.uint8)
-    return np.column_stack([x, y, z]).astype(np.float32), colors
-
-
 class Station:
     """The base station's page and its link to the robot.
 
@@ -92,10 +67,15 @@ class Station:
         port: Port of the page.
     """
 
-    def __init__(self, bus: ZenohBus, host: str = "127.0.0.1", port: int = 8080) -> None:
+    def __init__(
+        self, bus: ZenohBus, host: str = "127.0.0.1", port: int = 8080, biped: bool = False
+    ) -> None:
         import viser
 
         self.bus = bus
+        self.biped = biped
+        self.obstacles: Obstacles | None = None
+        self.plan: BipedPlan | None = None
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.mode = Mode.TORQUE_OFF
         self.direction_deg = 0.0
@@ -121,6 +101,8 @@ class Station:
             (MapUpdate.TOPIC, self._on_map),
             (Touchdown.TOPIC, self._on_touchdown),
             (LogLine.TOPIC, self._on_log),
+            (Obstacles.TOPIC, self._on_obstacles),
+            (BipedPlan.TOPIC, self._on_plan),
         ):
             bus.subscribe(topic, handler)
 
@@ -128,11 +110,11 @@ class Station:
     def _build_page(self) -> None:
         gui = self.server.gui
         self.link_text = gui.add_markdown("**link:** waiting for the robot")
-        with gui.add_folder("mode"):
+        with gui.add_folder("mode", visible=not self.biped):
             for label, mode in (("torque off", Mode.TORQUE_OFF), ("walking", Mode.WALKING)):
                 button = gui.add_button(label)
                 button.on_click(lambda _event, mode=mode: self._set_mode(mode))
-        with gui.add_folder("walk"):
+        with gui.add_folder("walk", visible=not self.biped):
             for label, degrees in DIRECTIONS.items():
                 button = gui.add_button(label)
                 button.on_click(lambda _event, d=degrees: self._set_direction(d))
@@ -147,6 +129,16 @@ class Station:
         self.depth_image = gui.add_image(np.zeros((24, 32, 3), np.uint8), label="depth")
         self.score_image = gui.add_image(np.zeros((32, 32, 3), np.uint8), label="score map")
         self.log_text = gui.add_markdown("**log:** -")
+        if self.biped:
+            with gui.add_folder("biped"):
+                for label, service in (
+                    ("start capture", "start_capture"),
+                    ("stop capture", "stop_capture"),
+                    ("clear", "clear"),
+                ):
+                    button = gui.add_button(label)
+                    button.on_click(lambda _event, s=service: self.call(s, Trigger()))
+                self.biped_text = gui.add_markdown("**biped:** click the ground to plan to it")
         self.server.scene.add_grid("/ground", width=6.0, height=6.0, position=(2.0, 0.0, 0.0))
 
         @self.server.scene.on_click()
@@ -171,12 +163,28 @@ class Station:
         self._changed()
 
     def set_goal(self, xy: tuple[float, float]) -> None:
-        """Walk to a point on the ground (map frame) [m]."""
-        self.goal = xy
+        """Walk to a point on the ground (map frame) [m]; for the biped, plan to it."""
         self.server.scene.add_icosphere(
             "/goal", radius=0.03, color=(250, 200, 0), position=(xy[0], xy[1], 0.02)
         )
+        if self.biped:
+            self.call("start_planning", PlanningGoal(xy[0], xy[1]))
+            return
+        self.goal = xy
         self._changed()
+
+    def call(self, service: str, request: Message) -> Ack:
+        """Ask one of the biped's services; the answer shows on the page."""
+        try:
+            reply = self.bus.request(service, request, timeout=3.0)
+        except FootfallError as exc:
+            reply = Ack(False, str(exc))
+        if not isinstance(reply, Ack):
+            reply = Ack(False, f"{service} answered a {type(reply).__name__}")
+        if self.biped:
+            verdict = "done" if reply.ok else "refused"
+            self.biped_text.content = f"**biped:** {service} {verdict}: {reply.text}"
+        return reply
 
     def _changed(self) -> None:
         self._dirty = True
@@ -206,6 +214,14 @@ class Station:
     def _on_touchdown(self, m: Touchdown) -> None:
         self.footholds.append(np.asarray(m.chosen_in_world, dtype=np.float32))
 
+    def _on_obstacles(self, m: Obstacles) -> None:
+        self._heard()
+        self.obstacles = m
+
+    def _on_plan(self, m: BipedPlan) -> None:
+        self._heard()
+        self.plan = m
+
     def _on_log(self, m: LogLine) -> None:
         self.log.append(f"`{m.stamp:8.2f}` {m.node} {m.level}: {m.text}")
 
@@ -231,7 +247,8 @@ class Station:
         """Take in what arrived, send the command (changed or due) and redraw the page."""
         self.bus.spin()
         now = time.monotonic()
-        if self._dirty or now >= self._next_beat or self.goal is not None:
+        due = self._dirty or now >= self._next_beat or self.goal is not None
+        if due and not self.biped:  # the biped is driven through its services
             stamp = time.time()
             self.bus.publish(ModeCommand.TOPIC, ModeCommand(self.mode, stamp))
             command = self.command()
@@ -257,7 +274,7 @@ class Station:
         self.link_text.content = (
             f"**link:** {'connected' if up else 'lost'}, last message "
             + (f"{age:.2f} s ago" if math.isfinite(age) else "never")
-            + f"; sending **{self.mode.value}**"
+            + ("" if self.biped else f"; sending **{self.mode.value}**")
         )
         if self.status is not None:
             s = self.status
@@ -298,6 +315,22 @@ class Station:
         if self.footholds:
             holds = np.stack(self.footholds)
             scene.add_point_cloud("/footholds", holds, (0, 220, 0), point_size=0.025)
+        self._draw_biped()
+
+    def _draw_biped(self) -> None:
+        """Obstacles red, path blue, footsteps green, the COM black (the dissertation's)."""
+        scene = self.server.scene
+        if self.obstacles is not None:
+            o = self.obstacles
+            scene.add_line_segments(
+                "/biped/obstacles", circles_segments(o.x, o.y, o.r), (220, 30, 30)
+            )
+        if self.plan is not None:
+            p = self.plan
+            scene.add_line_segments("/biped/path", polyline_segments(p.waypoints), (30, 60, 230))
+            feet = feet_segments(p.footsteps, FOOT_LENGTH, FOOT_WIDTH)
+            scene.add_line_segments("/biped/footsteps", feet, (20, 170, 40))
+            scene.add_line_segments("/biped/com", polyline_segments(p.com, 0.02), (0, 0, 0))
 
     def run(self, seconds: float | None = None, rate_hz: float = 50.0) -> None:
         """Serve the page and keep the link until the time is up (forever by default)."""
