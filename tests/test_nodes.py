@@ -139,6 +139,23 @@ def test_an_unreachable_command_freezes_the_robot_and_names_the_leg(default_spec
     assert robot.status[-1].state is not GaitState.FROZEN
 
 
+def test_late_commands_are_dropped_and_counted(default_spec):
+    """A command older than the one in force (late, out of order) changes nothing and is
+    counted in the status; a newer one is taken."""
+    robot = Robot(default_spec)
+    robot.bus.publish(ModeCommand.TOPIC, ModeCommand(Mode.WALKING, 1.0))
+    robot.bus.publish(WalkCommand.TOPIC, WalkCommand(speed=0.1, stamp=5.0))
+    robot.bus.publish(WalkCommand.TOPIC, WalkCommand(speed=0.0, stamp=4.0))  # late
+    robot.bus.publish(ModeCommand.TOPIC, ModeCommand(Mode.TORQUE_OFF, 0.5))  # late
+    robot.run(0.1)
+    assert robot.graph.movement.command.speed == 0.1
+    assert robot.status[-1].mode is Mode.WALKING
+    assert robot.status[-1].messages_dropped == 2
+    robot.bus.publish(WalkCommand.TOPIC, WalkCommand(speed=0.05, stamp=6.0))
+    robot.run(0.1)
+    assert robot.graph.movement.command.speed == 0.05
+
+
 def test_back_to_torque_off_goes_limp(default_spec):
     """Torque-off while walking makes the servos limp and stops the joint targets."""
     robot = Robot(default_spec)

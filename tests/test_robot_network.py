@@ -140,6 +140,8 @@ def test_killing_the_client_mid_walk_stands_the_robot_still_and_a_new_one_resume
             assert all(s.tilt < np.radians(10) for _, s in after)
             status = seen.status[-1]
             assert status.state is GaitState.REST and "no command" in status.frozen_reason
+            bus.publish_bytes(WalkCommand.TOPIC, b"\x00garbage")  # a malformed command
+            assert wait_for(bus, lambda: seen.status[-1].messages_dropped >= 1, 5.0)
             x_stopped = after[-1][1].position_body_in_world[0]
             start = time.monotonic()
             while time.monotonic() - start < 4.0:  # a new client

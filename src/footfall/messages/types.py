@@ -333,9 +333,11 @@ class GaitStatus(Message):
         steps_taken: Steps completed.
         footholds_adjusted: Touchdowns moved off their nominal cell.
         command_age: Seconds since the last command arrived (inf before the first).
+        messages_dropped: Messages the robot refused: malformed, or older than one it had.
     """
 
     TOPIC = "status"
+    VERSION = 2
 
     stamp: float
     mode: Mode
@@ -347,6 +349,7 @@ class GaitStatus(Message):
     steps_taken: int
     footholds_adjusted: int
     command_age: float
+    messages_dropped: int = 0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "mode", Mode(self.mode))

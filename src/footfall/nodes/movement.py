@@ -13,6 +13,7 @@ it.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from footfall.messages import (
     EffectorTargets,
@@ -58,10 +59,14 @@ class MovementNode:
         self.command: WalkCommand | None = None
         self.state: RobotState | None = None
         self.stop_reason = ""
+        self._mode_stamp: float | None = None
         self._time = 0.0
         self._command_time = -math.inf
         self._fresh_command = False
         self._touchdowns_sent = 0
+        self.late_messages = 0
+        # Messages the transport dropped as malformed, when the composition tells.
+        self.transport_dropped: Callable[[], int] | None = None
         bus.subscribe(ModeCommand.TOPIC, self._on_mode, last=True)
         bus.subscribe(WalkCommand.TOPIC, self._on_command, last=True)
         bus.subscribe(RobotState.TOPIC, self._on_state, last=True)
@@ -71,13 +76,25 @@ class MovementNode:
         self.publish_status()
 
     # Inputs ------------------------------------------------------------------------------
+    def _late(self, message: WalkCommand | ModeCommand, last: float | None) -> bool:
+        """An older message than one already taken (late, or out of order) is dropped."""
+        if last is not None and message.stamp < last:
+            self.late_messages += 1
+            return True
+        return False
+
     def _on_mode(self, message: ModeCommand) -> None:
+        if self._late(message, self._mode_stamp):
+            return
+        self._mode_stamp = message.stamp
         if message.mode is Mode.WALKING and self.mode is not Mode.WALKING:
             # No time passed for the controller while limp; it stands up from where it lies.
             self.controller.restart_clock(self.state)
         self.mode = message.mode
 
     def _on_command(self, message: WalkCommand) -> None:
+        if self._late(message, self.command.stamp if self.command is not None else None):
+            return
         self.command = message
         self._fresh_command = True
 
@@ -155,6 +172,8 @@ class MovementNode:
             steps_taken=c.scheduler.steps_taken,
             footholds_adjusted=c.footholds_adjusted,
             command_age=self._time - self._command_time,
+            messages_dropped=self.late_messages
+            + (self.transport_dropped() if self.transport_dropped is not None else 0),
         )
         self.bus.publish(GaitStatus.TOPIC, status)
         return status

@@ -84,6 +84,8 @@ def run_robot(
     robot = SimRobot.build(spec, walk, terrain, local, command_timeout=settings.command_timeout)
     judge = TerrainTask(local, terrain, walk.command, settings.stop_at_goal, frozen_timeout=None)
     bridge = Bridge(local, network, settings.outgoing, INCOMING)
+    if hasattr(network, "malformed"):  # malformed messages from the network count too
+        robot.graph.movement.transport_dropped = lambda: sum(network.malformed.values())
     scheduler = WallClockScheduler(walk.control_rate_hz)
     dt = scheduler.period
 
