@@ -56,7 +56,8 @@ def main() -> dict[str, object]:
     parser.add_argument("--seconds", type=float, default=20.0, help="walking time measured")
     args = parser.parse_args()
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    rates = [f"--rate={t}=all" for t in ("map", "state", "status", "joint_targets")]
+    full = ("map", "state", "status", "joint_targets", "effector_targets")
+    rates = [f"--rate={t}=all" for t in full]
     with tempfile.TemporaryDirectory() as out:
         robot = subprocess.Popen(
             [sys.executable, "-m", "footfall.cli", "robot", "--sim", "stairs", "--listen"]
@@ -94,6 +95,8 @@ def measure(endpoint: str, seconds: float) -> dict[str, object]:
         bus.subscribe(MapUpdate.TOPIC, lambda m: maps.append((time.time(), m.stamp)))
         bus.subscribe(DepthFrame.TOPIC, lambda f: depth_arrival.setdefault(f.stamp, time.time()))
         bus.subscribe(JointTargets.TOPIC, lambda j: joints.append((time.time(), j)))
+        for topic in ("pose", "state", "effector_targets", "touchdown", "log"):
+            bus.subscribe(topic, lambda m: None)  # counted for the bandwidth
         end = time.monotonic() + 90.0
         while not (epoch and depth_arrival) and time.monotonic() < end:
             bus.spin(0.05)

@@ -14,6 +14,7 @@ from footfall.errors import MessageError
 from footfall.messages import (
     Ack,
     BipedPlan,
+    ColorImage,
     DepthFrame,
     EffectorTargets,
     GaitState,
@@ -140,6 +141,7 @@ def examples(rng: np.random.Generator) -> list:
         PlanningGoal(3.0, -1.0),
         NewMap(rng.normal(size=3), rng.normal(size=3), 0.25),
         Trigger(1.0),
+        ColorImage(0.25, rng.integers(0, 255, (48, 64, 3), dtype=np.uint8), 7),
         Ack(False, "the goal lies inside an obstacle"),
     ]
 

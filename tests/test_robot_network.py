@@ -45,12 +45,14 @@ class Observer:
         self.states: list[tuple[float, RobotState]] = []
         self.targets: list[EffectorTargets] = []
         self.depth = 0
+        self.color = 0
         self.maps = 0
         bus.subscribe(GaitStatus.TOPIC, self.status.append)
         bus.subscribe(RobotState.TOPIC, lambda m: self.states.append((time.monotonic(), m)))
         bus.subscribe(EffectorTargets.TOPIC, self.targets.append)
         bus.subscribe(DepthFrame.TOPIC, lambda m: setattr(self, "depth", self.depth + 1))
         bus.subscribe(MapUpdate.TOPIC, lambda m: setattr(self, "maps", self.maps + 1))
+        bus.subscribe("color", lambda m: setattr(self, "color", self.color + 1))
 
 
 def wait_for(bus: ZenohBus, done, seconds: float) -> bool:
@@ -72,7 +74,8 @@ def test_a_client_in_another_process_walks_the_robot_across_the_stairs(tmp_path)
         with ZenohBus(ZenohConfig(connect=(endpoint,))) as bus:
             seen = Observer(bus)
             task = TerrainTask(bus, make_terrain("stairs", seed=0), WalkCommand(speed=0.1))
-            assert wait_for(bus, lambda: seen.status and seen.depth and seen.maps, 60.0)
+            ready = lambda: seen.status and seen.depth and seen.maps and seen.color  # noqa: E731
+            assert wait_for(bus, ready, 60.0)
             assert seen.status[-1].mode is Mode.TORQUE_OFF
             bus.publish(ModeCommand.TOPIC, ModeCommand(Mode.WALKING))
             start = time.monotonic()
@@ -158,3 +161,21 @@ def test_killing_the_client_mid_walk_stands_the_robot_still_and_a_new_one_resume
     assert robot.returncode == 0, output
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert not metrics["fell"]
+
+
+def test_by_default_the_robot_listens_on_loopback_only():
+    """`footfall robot` without network options listens on 127.0.0.1 only, without
+    scouting, and so does the session it opens."""
+    from footfall.cli import build_parser
+    from footfall.cli.robot import network_config
+    from footfall.runtime.zenoh_bus import DEFAULT_ENDPOINT, is_loopback
+
+    config = network_config(build_parser().parse_args(["robot"]))
+    assert config.listen == (DEFAULT_ENDPOINT,) and not config.scouting
+    assert not config.allow_remote and config.connect == ()
+    port = free_port()  # the same configuration on a port free here
+    with ZenohBus(ZenohConfig(listen=(config.listen[0].replace("7447", str(port)),))) as bus:
+        locators = bus.listening_locators()
+    assert locators and all(is_loopback(loc) for loc in locators)
+    station = network_config(build_parser().parse_args(["station"]))
+    assert station.listen == () and station.connect == (DEFAULT_ENDPOINT,)

@@ -9,6 +9,7 @@ from footfall.messages.biped import Trigger as Trigger
 from footfall.messages.codec import Message as Message
 from footfall.messages.codec import decode as decode
 from footfall.messages.codec import message_types as message_types
+from footfall.messages.types import ColorImage as ColorImage
 from footfall.messages.types import DepthFrame as DepthFrame
 from footfall.messages.types import EffectorTargets as EffectorTargets
 from footfall.messages.types import GaitState as GaitState
@@ -27,6 +28,7 @@ from footfall.messages.types import WalkCommand as WalkCommand
 __all__ = [
     "Ack",
     "BipedPlan",
+    "ColorImage",
     "DepthFrame",
     "EffectorTargets",
     "GaitState",

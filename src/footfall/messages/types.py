@@ -1,9 +1,11 @@
 """The messages footfall's nodes exchange: small frozen values with frames and units in names.
 
 Each type names the topic it travels on by default (``TOPIC``; see ``docs/runtime.md``) and
-encodes to bytes and back (:mod:`footfall.messages.codec`). Times are seconds on the
-sender's clock; world quantities are in the map (odometry) frame, z up; poses say which
-frame they place (``camera_in_world``: maps camera-frame points into the world).
+encodes to bytes and back (:mod:`footfall.messages.codec`). They are one module on purpose:
+together they are the interface between the nodes, read and versioned as one. Times are
+seconds on the sender's clock; world quantities are in the map (odometry) frame, z up;
+poses say which frame they place (``camera_in_world``: maps camera-frame points into the
+world).
 """
 
 from __future__ import annotations
@@ -135,6 +137,28 @@ class DepthFrame(Message):
     def __post_init__(self) -> None:
         if np.ndim(self.depth) != 2:
             raise MessageError(f"depth must be a 2-D image, got shape {np.shape(self.depth)}")
+
+
+@dataclass(frozen=True)
+class ColorImage(Message):
+    """A colour image from the body camera, for the operator.
+
+    Attributes:
+        stamp: Capture time [s].
+        image: Shape (height, width, 3), ``uint8`` RGB.
+        sequence: Frame number (that of the depth frame taken with it).
+    """
+
+    TOPIC = "color"
+
+    stamp: float
+    image: npt.NDArray[np.uint8]
+    sequence: int = 0
+
+    def __post_init__(self) -> None:
+        shape = np.shape(self.image)
+        if len(shape) != 3 or shape[2] != 3:
+            raise MessageError(f"a colour image must be (height, width, 3), got {shape}")
 
 
 @dataclass(frozen=True)

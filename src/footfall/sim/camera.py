@@ -64,6 +64,17 @@ class SimDepthCamera:
         depth[depth > self.mount.max_range] = 0.0
         return depth, self.pose(data)
 
+    def capture_color(self, data: mujoco.MjData) -> npt.NDArray[np.uint8]:
+        """A colour image of the same view, shape (height, width, 3), ``uint8`` RGB."""
+        self._renderer.disable_depth_rendering()
+        try:
+            self._renderer.update_scene(
+                data, camera=self._camera_id, scene_option=self._scene_option
+            )
+            return self._renderer.render().copy()
+        finally:
+            self._renderer.enable_depth_rendering()
+
     def close(self) -> None:
         """Release the rendering context."""
         self._renderer.close()

@@ -27,6 +27,7 @@ from footfall.sim.walk import SimRobot, WalkResult, WalkSettings
 # What the robot sends out, and at most how often [Hz] (None: every message).
 OUTGOING: dict[str, float | None] = {
     "depth": None,
+    "color": 5.0,
     "pose": None,
     "map": 5.0,
     "status": 20.0,
@@ -81,7 +82,9 @@ def run_robot(
     walk = settings.walk
     terrain = make_terrain(walk.terrain, seed=walk.seed)
     local = InProcessBus()
-    robot = SimRobot.build(spec, walk, terrain, local, command_timeout=settings.command_timeout)
+    robot = SimRobot.build(
+        spec, walk, terrain, local, command_timeout=settings.command_timeout, color=True
+    )
     judge = TerrainTask(local, terrain, walk.command, settings.stop_at_goal, frozen_timeout=None)
     bridge = Bridge(local, network, settings.outgoing, INCOMING)
     if hasattr(network, "malformed"):  # malformed messages from the network count too

@@ -13,7 +13,7 @@ import time
 
 from scipy.spatial.transform import Rotation
 
-from footfall.messages import DepthFrame, PoseEstimate
+from footfall.messages import ColorImage, DepthFrame, PoseEstimate
 from footfall.runtime.bus import Bus
 from footfall.sensing.pose import Pose, SlamNoise
 from footfall.sim.camera import SimDepthCamera
@@ -34,11 +34,14 @@ class SimCameraNode:
         bus: The bus.
         backend: The simulated robot (built with the camera mount).
         mount: The camera mount.
+        color: Also render and publish a colour image of each frame (for a station).
     """
 
     name = "camera"
 
-    def __init__(self, bus: Bus, backend: MujocoHexapod, mount: CameraMount) -> None:
+    def __init__(
+        self, bus: Bus, backend: MujocoHexapod, mount: CameraMount, color: bool = False
+    ) -> None:
         self.bus = bus
         self.backend = backend
         self.camera = SimDepthCamera(backend.model, mount)
@@ -46,6 +49,7 @@ class SimCameraNode:
         self.camera_in_body = (
             true_body_pose(backend).inverse().compose(self.camera.pose(backend.data))
         )
+        self.color = color
         self.render_ms: list[float] = []
         self._next_frame = 0.0
 
@@ -61,6 +65,9 @@ class SimCameraNode:
             t, depth, self.camera.intrinsics, self.camera_in_body, sequence=len(self.render_ms)
         )
         self.bus.publish(DepthFrame.TOPIC, frame)
+        if self.color:
+            image = self.camera.capture_color(self.backend.data)
+            self.bus.publish(ColorImage.TOPIC, ColorImage(t, image, frame.sequence))
         return True
 
     def timing(self) -> dict[str, float]:

@@ -140,11 +140,13 @@ class SimRobot:
         terrain: Terrain,
         bus: Bus,
         command_timeout: float | None = None,
+        color: bool = False,
     ) -> SimRobot:
         """Put the robot on the terrain, let it settle, and start its nodes on ``bus``.
 
         Blind, only the movement and servo nodes run; planned, the camera, pose and mapping
         nodes too, with the ground under the standing robot as a prior and a first frame.
+        With ``color`` the camera also renders colour images (for a station).
         """
         camera_mount = None if settings.blind else settings.camera
         height = settings.command.body_height
@@ -158,7 +160,7 @@ class SimRobot:
             assert standing.feet_in_world is not None
             body = standing.position_body_in_world
             mapping = MappingNode(bus, settings.map, settings.score, centre=(body[0], body[1]))
-            camera = SimCameraNode(bus, backend, settings.camera)
+            camera = SimCameraNode(bus, backend, settings.camera, color=color)
             SimPoseNode(bus, camera)
             ground = float(np.mean(standing.feet_in_world[:, 2])) - spec.foot_radius
             bus.publish(GroundPrior.TOPIC, GroundPrior(0.0, body, ground, START_PRIOR_RADIUS))

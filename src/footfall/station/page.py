@@ -21,6 +21,7 @@ from footfall.errors import FootfallError
 from footfall.messages import (
     Ack,
     BipedPlan,
+    ColorImage,
     DepthFrame,
     EffectorTargets,
     GaitStatus,
@@ -86,6 +87,7 @@ class Station:
         self.state: RobotState | None = None
         self.targets: EffectorTargets | None = None
         self.depth: DepthFrame | None = None
+        self.color: ColorImage | None = None
         self.map: MapUpdate | None = None
         self.footholds: deque[np.ndarray] = deque(maxlen=120)
         self.log: deque[str] = deque(maxlen=8)
@@ -98,6 +100,7 @@ class Station:
             (RobotState.TOPIC, self._on_state),
             (EffectorTargets.TOPIC, self._on_targets),
             (DepthFrame.TOPIC, self._on_depth),
+            (ColorImage.TOPIC, self._on_color),
             (MapUpdate.TOPIC, self._on_map),
             (Touchdown.TOPIC, self._on_touchdown),
             (LogLine.TOPIC, self._on_log),
@@ -127,6 +130,7 @@ class Station:
         self.status_text = gui.add_markdown("**status:** -")
         self.pose_text = gui.add_markdown("**pose:** -")
         self.depth_image = gui.add_image(np.zeros((24, 32, 3), np.uint8), label="depth")
+        self.color_image = gui.add_image(np.zeros((24, 32, 3), np.uint8), label="colour")
         self.score_image = gui.add_image(np.zeros((32, 32, 3), np.uint8), label="score map")
         self.log_text = gui.add_markdown("**log:** -")
         if self.biped:
@@ -207,6 +211,9 @@ class Station:
     def _on_depth(self, m: DepthFrame) -> None:
         self._heard()
         self.depth = m
+
+    def _on_color(self, m: ColorImage) -> None:
+        self.color = m
 
     def _on_map(self, m: MapUpdate) -> None:
         self.map = m
@@ -294,6 +301,8 @@ class Station:
         scene = self.server.scene
         if self.depth is not None:
             self.depth_image.image = depth_image(self.depth)
+        if self.color is not None:
+            self.color_image.image = np.ascontiguousarray(self.color.image)
         if self.map is not None:
             self.score_image.image = score_image(self.map)
             points, colors = map_points(self.map)
