@@ -4,13 +4,29 @@ from __future__ import annotations
 
 import signal
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from footfall.reports.walk import WalkReport, WalkRequest, prepare_walk
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
 from footfall.sim.robot import OUTGOING, RobotSettings, run_robot
+
+
+@contextmanager
+def stop_on_signals() -> Iterator[Callable[[], bool]]:
+    """While inside, SIGINT and SIGTERM only ask to stop; yields whether one has."""
+    asked: list[int] = []
+    previous = {
+        s: signal.signal(s, lambda signum, frame: asked.append(signum))
+        for s in (signal.SIGINT, signal.SIGTERM)
+    }
+    try:
+        yield lambda: bool(asked)
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
 
 
 @dataclass(frozen=True)
@@ -46,28 +62,16 @@ def run_robot_report(
         on_tick: Called with the run time [s] after each tick.
     """
     job = prepare_walk(request.walk)
-    stop = {"asked": False}
-
-    def ask_to_stop(signum: int, frame: object) -> None:
-        stop["asked"] = True
-
-    previous = {s: signal.signal(s, ask_to_stop) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        with ZenohBus(request.network) as network:
-            if on_ready is not None:
-                on_ready(network)
-            settings = RobotSettings(
-                walk=job.settings,
-                seconds=request.seconds,
-                stop_at_goal=request.stop_at_goal,
-                outgoing={**OUTGOING, **request.rates},
-            )
-            result, _ = run_robot(
-                job.spec, settings, network, on_tick=on_tick, should_stop=lambda: stop["asked"]
-            )
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+    with stop_on_signals() as stop, ZenohBus(request.network) as network:
+        if on_ready is not None:
+            on_ready(network)
+        settings = RobotSettings(
+            walk=job.settings,
+            seconds=request.seconds,
+            stop_at_goal=request.stop_at_goal,
+            outgoing={**OUTGOING, **request.rates},
+        )
+        result, _ = run_robot(job.spec, settings, network, on_tick=on_tick, should_stop=stop)
     return WalkReport(job, result)
 
 
@@ -114,22 +118,12 @@ def run_biped(
             else dissertation_map(request.case or 1)
         )
         circles, start, name = plan_map.obstacles, plan_map.start, plan_map.name
-    stop = {"asked": False}
-
-    def ask_to_stop(signum: int, frame: object) -> None:
-        stop["asked"] = True
-
-    previous = {s: signal.signal(s, ask_to_stop) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        with ZenohBus(request.network) as network:
-            node = BipedPlanningNode(network, circles, start, name)
-            if on_ready is not None:
-                on_ready(network)
-            end = time.monotonic() + request.seconds
-            while not stop["asked"] and time.monotonic() < end:
-                network.spin(1.0 / rate_hz)
-                node.tick()
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+    with stop_on_signals() as stop, ZenohBus(request.network) as network:
+        node = BipedPlanningNode(network, circles, start, name)
+        if on_ready is not None:
+            on_ready(network)
+        end = time.monotonic() + request.seconds
+        while not stop() and time.monotonic() < end:
+            network.spin(1.0 / rate_hz)
+            node.tick()
     return {"services": list(SERVICES), "obstacles_in_view": len(circles), "map": name}
