@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
 from test_robot_network import start_robot
@@ -127,3 +128,25 @@ def test_a_click_meets_the_ground_where_the_ray_does():
     assert ground_point((0.0, 0.0, 2.0), (1.0, 0.5, -1.0)) == pytest.approx((2.0, 1.0))
     assert ground_point((0.0, 0.0, 2.0), (1.0, 0.0, 0.5)) is None
     assert ground_point((0.0, 0.0, 2.0), (1.0, 0.0, 0.0)) is None
+
+
+def test_the_map_surface_covers_known_cells_only():
+    """The 3-D surface meshes only squares of known cells, walkable and not apart, and its
+    vertices sit at the cells' centres and heights."""
+    from footfall.messages import MapUpdate
+    from footfall.station.views import map_surface
+
+    n = 8
+    heights = np.full((n, n), np.nan)
+    heights[:4, :] = 0.05  # a known strip
+    known = np.isfinite(heights)
+    valid = known.copy()
+    valid[:2, :] = False
+    zeros = np.zeros((n, n))
+    update = MapUpdate(0.0, 1, heights, known, None, zeros, zeros, zeros, valid, (1.0, -1.0), 0.1)
+    vertices, walkable, other = map_surface(update, step=1)
+    assert vertices.shape == (n * n, 3)
+    np.testing.assert_allclose(vertices[0], [1.05, -0.95, 0.05], atol=1e-6)
+    assert len(walkable) == 2 * 1 * (n - 1) and len(other) == 2 * 2 * (n - 1)
+    used = np.unique(np.concatenate([walkable, other]))
+    assert known.ravel()[used].all()

@@ -131,3 +131,19 @@ def test_fall_tells_a_collapse_from_a_body_lowered_on_purpose():
     assert fallen(0.5, 0.02, 0.02, 0.09, commanded)
     assert fallen(35.0, 0.09, 0.09, 0.09, commanded)
     assert not fallen(1.0, 0.09, 0.09, 0.09, commanded)
+
+
+def test_skipped_ticks_keep_the_physics_on_the_controller_clock(default_spec):
+    """When a wall-clock scheduler skips ticks, the robot lives through the gap (holding its
+    targets): the simulator's time stays the controller's."""
+    from footfall.runtime.bus import InProcessBus
+    from footfall.sim.terrain import make_terrain
+    from footfall.sim.walk import SimRobot, WalkSettings
+
+    settings = WalkSettings(terrain="flat", blind=True)
+    robot = SimRobot.build(default_spec, settings, make_terrain("flat"), InProcessBus())
+    start = robot.backend.data.time
+    robot.step(0.0, 0.01)
+    robot.step(0.05, 0.01)  # ticks 0.01 to 0.04 were skipped
+    assert robot.backend.data.time - start == pytest.approx(0.06, abs=1e-9)
+    robot.close()

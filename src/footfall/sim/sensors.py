@@ -57,7 +57,8 @@ class SimCameraNode:
         """Take and publish a frame if one is due at time ``t`` [s]; True when it did."""
         if t + 1e-9 < self._next_frame:
             return False
-        self._next_frame += self.period
+        while self._next_frame <= t + 1e-9:  # frames missed in an overrun are not caught up
+            self._next_frame += self.period
         t0 = time.perf_counter()
         depth, _ = self.camera.capture(self.backend.data)
         self.render_ms.append(1e3 * (time.perf_counter() - t0))

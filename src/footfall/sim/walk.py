@@ -121,6 +121,7 @@ class SimRobot:
         graph: The movement and servo nodes and the per-tick record.
         camera: The camera node (planned walking), else None.
         mapping: The mapping node (planned walking), else None.
+        simulated_until: Controller time the physics has been stepped to [s].
     """
 
     spec: HexapodSpec
@@ -131,6 +132,7 @@ class SimRobot:
     graph: WalkingGraph
     camera: SimCameraNode | None
     mapping: MappingNode | None
+    simulated_until: float = 0.0
 
     @classmethod
     def build(
@@ -177,8 +179,17 @@ class SimRobot:
         return cls(spec, settings, terrain, backend, bus, graph, camera, mapping)
 
     def step(self, t: float, dt: float) -> None:
-        """One control tick at ``t``, the physics over ``dt``, and the camera if due [s]."""
+        """One control tick at ``t``, the physics over ``dt``, and the camera if due [s].
+
+        A tick later than the physics has come (a wall-clock scheduler skipped ticks after
+        an overrun) first lets the robot live through the gap holding its last joint
+        targets, as servos do when their controller is late: simulated time stays the
+        controller's.
+        """
+        if t > self.simulated_until + 1e-9:
+            self.backend.advance(t - self.simulated_until)
         self.graph.step(t, dt)
+        self.simulated_until = t + dt
         if self.camera is not None:
             self.camera.tick(t + dt)
 

@@ -43,7 +43,7 @@ from footfall.station.views import (
     depth_image,
     feet_segments,
     ground_point,
-    map_points,
+    map_surface,
     polyline_segments,
     score_image,
 )
@@ -305,8 +305,13 @@ class Station:
             self.color_image.image = np.ascontiguousarray(self.color.image)
         if self.map is not None:
             self.score_image.image = score_image(self.map)
-            points, colors = map_points(self.map)
-            scene.add_point_cloud("/map", points, colors, point_size=0.03)
+            vertices, walkable, other = map_surface(self.map)
+            for name, faces, color in (
+                ("/map/walkable", walkable, (60, 180, 90)),
+                ("/map/invalid", other, (210, 50, 50)),
+            ):
+                if len(faces):
+                    scene.add_mesh_simple(name, vertices, faces, color=color, side="double")
         if self.state is not None and self.status is not None:
             p = self.status.body_pose
             q = self.state.orientation_body_in_world.as_quat()  # x, y, z, w

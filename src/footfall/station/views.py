@@ -36,17 +36,36 @@ def depth_image(frame: DepthFrame, max_range: float = 3.0) -> npt.NDArray[np.uin
     return np.ascontiguousarray(np.repeat(grey.astype(np.uint8)[..., None], 3, axis=-1))
 
 
-def map_points(update: MapUpdate, step: int = 2) -> tuple[np.ndarray, np.ndarray]:
-    """Known cells as coloured points (every ``step``-th cell): green valid, red invalid."""
+def map_surface(
+    update: MapUpdate, step: int = 2
+) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.int32], npt.NDArray[np.int32]]:
+    """The height map as a triangle surface through the centres of every ``step``-th cell.
+
+    Only squares of four known cells are meshed; a square is walkable when its first cell
+    is valid.
+
+    Returns:
+        Vertices, shape (n, 3) [m]; faces of walkable squares and of the others, each
+        shape (k, 3).
+    """
+    heights = update.heights[::step, ::step]
     known = update.known[::step, ::step]
-    i, j = np.nonzero(known)
-    res = update.resolution
-    x = update.origin[0] + (i * step + 0.5) * res
-    y = update.origin[1] + (j * step + 0.5) * res
-    z = update.heights[::step, ::step][i, j]
-    valid = update.valid[::step, ::step][i, j]
-    colors = np.where(valid[:, None], [[60, 180, 90]], [[210, 50, 50]]).astype(np.uint8)
-    return np.column_stack([x, y, z]).astype(np.float32), colors
+    valid = update.valid[::step, ::step]
+    ni, nj = heights.shape
+    i, j = np.meshgrid(np.arange(ni), np.arange(nj), indexing="ij")
+    res = update.resolution * step
+    x = update.origin[0] + (i * step + 0.5) * update.resolution
+    y = update.origin[1] + (j * step + 0.5) * update.resolution
+    del res
+    vertices = np.column_stack([x.ravel(), y.ravel(), np.nan_to_num(heights).ravel()])
+    index = np.arange(ni * nj).reshape(ni, nj)
+    a, b, c, d = index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]
+    whole = known[:-1, :-1] & known[1:, :-1] & known[1:, 1:] & known[:-1, 1:]
+    faces = [np.stack([a, b, c], -1), np.stack([a, c, d], -1)]
+    good = whole & valid[:-1, :-1]
+    bad = whole & ~valid[:-1, :-1]
+    pick = lambda mask: np.concatenate([f[mask] for f in faces]).astype(np.int32)  # noqa: E731
+    return vertices.astype(np.float32), pick(good), pick(bad)
 
 
 def polyline_segments(points: npt.ArrayLike, z: float = 0.01) -> npt.NDArray[np.float32]:
