@@ -1,13 +1,15 @@
 """Obstacles from a point cloud (dissertation §6.3.1) for the biped planner.
 
-Camera points pass a pass-through filter (depth at most 5 m), go from the camera frame
-to ``base_link`` and the ``map`` frame (eqs. 73-78), lose the ground (above a known
-ground plane, the dissertation's "ground plane approach"; or the dominant plane found by
-RANSAC when the floor is in view), and are grouped by Euclidean cluster extraction on a
-kd-tree (tolerance 0.30 m, at least 5 points). Each cluster gets its centroid and a box
-aligned with its principal axes (PCA in the ground plane), which becomes one circle or a
-chain of circles (eqs. 79-81). The inverted-cone detector of Manduchi et al. (eqs. 71-72)
-is the alternative to ground removal.
+Camera points pass a pass-through filter (depth at most 5 m) and a voxel grid (2 cm), go
+to the map frame of the floor under the camera (eqs. 73-78; :mod:`footfall.pointcloud.ground`),
+lose the ground (points within a clearance of the floor: a known plane, from the camera's
+height and pitch or plane coefficients, the dissertation's "ground plane approach"; or
+the floor RANSAC finds near the expected up axis), and are grouped by Euclidean cluster
+extraction (tolerance 0.30 m, at least 5 points) in memory linear in the points. Each
+cluster gets its centroid and a box aligned with its principal axes (PCA in the ground
+plane), which becomes one circle or a chain of circles (eqs. 79-81); clusters whose
+circles would cover free floor are split (:mod:`footfall.biped.cluster_split`). The
+inverted-cone detector of Manduchi et al. (eqs. 71-72) is the alternative to ground removal.
 
 Errata: eqs. 76-78 rotate by +90 degrees, which maps the optical frame's x right and y down
 to left and up; for the optical frame (x right, y down, z forward) the camera-to-base
@@ -18,21 +20,25 @@ y rotation is ``-sin``. Eq. 71 compares the vertical coordinates of both points.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+import time
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from footfall.biped.avoidance import Circle
+from footfall.biped.cluster_split import FreeFloorGrid, split_cluster
 from footfall.biped.maps import box_circles
 from footfall.errors import ConfigError, DatasetError
+from footfall.pointcloud.filters import (
+    euclidean_clusters,
+    inverted_cone_points,
+    voxel_downsample,
+)
+from footfall.pointcloud.ground import OPTICAL_TO_BASE, CameraOverFloor, GroundPlane, find_ground
 
-# Optical camera frame (x right, y down, z forward) -> base_link (x forward, y left, z up).
-OPTICAL_TO_BASE = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+GROUND_METHODS = ("plane", "ransac", "cones")
 
 
 @dataclass(frozen=True)
@@ -41,36 +47,66 @@ class DetectionConfig:
 
     Attributes:
         max_depth: Pass-through filter: camera points farther than this along z go [m].
-        ground: ``"plane"`` (remove points near the known ground height), ``"ransac"`` (fit
-            and remove the dominant plane) or ``"cone"`` (Manduchi's inverted cones).
-        ground_height: Height of the known ground plane in the map frame [m].
-        ground_clearance: Points this close to the ground count as ground [m].
-        ransac_threshold: Inlier distance of the RANSAC plane [m].
-        ransac_iterations: RANSAC hypotheses.
+        voxel_size: Voxel grid side before everything else [m]; 0 keeps every point.
+        ground: ``"plane"`` (remove points near the known ground), ``"ransac"`` (find the
+            floor near the expected up axis) or ``"cones"`` (Manduchi's inverted cones).
+        ground_height: Height of the known ground plane in the map frame [m] (map-frame
+            clouds; a camera-frame cloud's floor is z = 0 by construction).
+        ground_clearance: Points at most this high above the ground count as ground [m].
+        ransac_threshold: Inlier distance of a RANSAC plane [m].
+        ransac_iterations: RANSAC hypotheses per plane.
+        ground_max_tilt_deg: Largest angle between the ground's normal and the expected up
+            axis [deg]; None: 15 when the up axis is known (a map-frame cloud, a camera
+            pose given), 50 for the guess of a level camera.
+        min_ground_fraction: Smallest share of the points a ground candidate must hold.
         cluster_tolerance: Euclidean clustering radius [m].
-        min_cluster_size: Smallest cluster kept [points].
+        min_cluster_size: Smallest cluster kept [points, after the voxel grid].
         cone_min_height: ``H_min`` of eq. 71 [m].
         cone_max_height: ``H_max`` of eq. 71 [m].
         cone_max_slope: ``theta_max`` of eq. 72 [rad].
+        split_free_fraction: Clusters whose circles cover free floor inside their box, away
+            from their points, of more than this share of their area are split; 1 never
+            splits.
+        split_cell: Cell side of the free-floor grid [m].
     """
 
     max_depth: float = 5.0
-    ground: str = "plane"
+    voxel_size: float = 0.02
+    ground: str = "ransac"
     ground_height: float = 0.0
     ground_clearance: float = 0.05
     ransac_threshold: float = 0.02
     ransac_iterations: int = 200
+    ground_max_tilt_deg: float | None = None
+    min_ground_fraction: float = 0.1
     cluster_tolerance: float = 0.30
     min_cluster_size: int = 5
     cone_min_height: float = 0.05
     cone_max_height: float = 1.0
     cone_max_slope: float = math.radians(45.0)
+    split_free_fraction: float = 0.1
+    split_cell: float = 0.05
 
     def __post_init__(self) -> None:
-        if self.ground not in ("plane", "ransac", "cone"):
-            raise ConfigError(f"ground must be 'plane', 'ransac' or 'cone', got {self.ground!r}")
+        if self.ground == "cone":  # the singular, as earlier versions spelt it
+            object.__setattr__(self, "ground", "cones")
+        if self.ground not in GROUND_METHODS:
+            raise ConfigError(
+                f"ground must be one of {', '.join(GROUND_METHODS)}, got {self.ground!r}"
+            )
         if not (self.cluster_tolerance > 0 and self.min_cluster_size >= 1 and self.max_depth > 0):
             raise ConfigError("cluster tolerance, cluster size and max depth must be positive")
+        if not self.voxel_size >= 0:
+            raise ConfigError(f"voxel size must be >= 0, got {self.voxel_size}")
+        tilt = self.ground_max_tilt_deg
+        if tilt is not None and not 0 < tilt < 90:
+            raise ConfigError(f"ground tilt tolerance must lie in (0, 90) degrees, got {tilt}")
+
+    def tilt_rad(self, up_known: bool) -> float:
+        """The ground's tilt tolerance [rad]."""
+        if self.ground_max_tilt_deg is not None:
+            return math.radians(self.ground_max_tilt_deg)
+        return math.radians(15.0 if up_known else 50.0)
 
 
 @dataclass(frozen=True)
@@ -86,6 +122,9 @@ class ObstacleCluster:
         yaw: Heading of the first principal axis [rad].
         points: How many points it has.
         circles: Its circles (eqs. 79-81), not inflated.
+        empty_fraction: Share of its circles' area that holds no obstacle point.
+        free_floor_fraction: Share of its circles' area seen to be free floor.
+        component: Index of the Euclidean cluster it was split from.
     """
 
     centroid: npt.NDArray[np.float64]
@@ -96,6 +135,9 @@ class ObstacleCluster:
     yaw: float
     points: int
     circles: tuple[Circle, ...] = field(default=())
+    empty_fraction: float = 0.0
+    free_floor_fraction: float = 0.0
+    component: int = 0
 
 
 def camera_to_map(
@@ -117,78 +159,6 @@ def camera_to_map(
     )
     rotation = Rotation.from_euler("xyz", np.asarray(robot_rpy, dtype=np.float64))
     return rotation.apply(p) + np.asarray(robot_position, dtype=np.float64)
-
-
-def ransac_plane(
-    points: npt.NDArray[np.float64], threshold: float, iterations: int, rng: np.random.Generator
-) -> tuple[npt.NDArray[np.float64], float, npt.NDArray[np.bool_]]:
-    """The plane ``n . p + d = 0`` with the most points within ``threshold``.
-
-    Returns:
-        Unit normal, offset and the inlier mask.
-    """
-    if len(points) < 3:
-        raise DatasetError("RANSAC needs at least 3 points")
-    best = (np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(len(points), dtype=bool))
-    for _ in range(iterations):
-        a, b, c = points[rng.choice(len(points), 3, replace=False)]
-        normal = np.cross(b - a, c - a)
-        norm = np.linalg.norm(normal)
-        if norm < 1e-12:
-            continue
-        normal /= norm
-        d = -float(normal @ a)
-        inliers = np.abs(points @ normal + d) < threshold
-        if inliers.sum() > best[2].sum():
-            best = (normal, d, inliers)
-    normal, d, inliers = best
-    # Refine by least squares on the inliers.
-    if inliers.sum() >= 3:
-        centre = points[inliers].mean(axis=0)
-        normal = np.linalg.svd(points[inliers] - centre, full_matrices=False)[2][-1]
-        d = -float(normal @ centre)
-        inliers = np.abs(points @ normal + d) < threshold
-    return normal, d, inliers
-
-
-def euclidean_clusters(
-    points: npt.NDArray[np.float64], tolerance: float, min_size: int
-) -> list[npt.NDArray[np.int64]]:
-    """Euclidean cluster extraction on a kd-tree.
-
-    Points linked by chains of neighbours closer than ``tolerance`` form a cluster;
-    clusters smaller than ``min_size`` go.
-    """
-    if len(points) == 0:
-        return []
-    pairs = cKDTree(points).query_pairs(tolerance, output_type="ndarray")
-    graph = coo_matrix(
-        (np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points), len(points))
-    )
-    _, labels = connected_components(graph, directed=False)
-    clusters = [np.flatnonzero(labels == k) for k in np.unique(labels)]
-    return sorted((c for c in clusters if len(c) >= min_size), key=len, reverse=True)
-
-
-def inverted_cone_points(
-    points: npt.NDArray[np.float64], config: DetectionConfig
-) -> npt.NDArray[np.bool_]:
-    """Points on an obstacle by Manduchi's test (eqs. 71-72).
-
-    A point is an obstacle point when another lies in its upward or downward cone:
-    ``H_min < |dz| < H_max`` and ``|dz| / |dp| > sin(theta_max)``.
-    """
-    reach = config.cone_max_height / math.sin(config.cone_max_slope)
-    pairs = cKDTree(points).query_pairs(reach, output_type="ndarray")
-    if len(pairs) == 0:
-        return np.zeros(len(points), dtype=bool)
-    delta = points[pairs[:, 1]] - points[pairs[:, 0]]
-    dz = np.abs(delta[:, 2])
-    compatible = (dz > config.cone_min_height) & (dz < config.cone_max_height)
-    compatible &= dz / np.linalg.norm(delta, axis=1) > math.sin(config.cone_max_slope)
-    mask = np.zeros(len(points), dtype=bool)
-    mask[pairs[compatible].ravel()] = True
-    return mask
 
 
 def describe_cluster(points: npt.NDArray[np.float64]) -> ObstacleCluster:
@@ -216,30 +186,118 @@ class Detection:
     """What the detector found.
 
     Attributes:
-        clusters: Obstacles, largest first.
-        points_in_map: The points after the pass-through filter, in the map frame.
+        clusters: Obstacles, largest component first.
+        points_in_map: The points after the pass-through filter and the voxel grid, in the
+            map frame.
         obstacle_mask: Which of them belong to obstacles (ground removed).
-        ground_normal: Normal of the ground plane (RANSAC), or +z.
+        ground: The ground plane in the map frame.
+        camera: For a camera-frame cloud, the camera over the floor the map frame stands on
+            (found by RANSAC, or as given); None for a map-frame cloud.
+        prior_up_in_camera: The up axis the camera pose given (or a level camera) implies,
+            in the camera frame; None for a map-frame cloud.
+        ground_in_camera: For a camera-frame cloud, the ground plane in the camera frame.
+        points_in: Finite points read.
+        voxel_size_m: Voxel side used [m].
+        detect_ms: Detection time [ms].
     """
 
     clusters: list[ObstacleCluster]
     points_in_map: npt.NDArray[np.float64]
     obstacle_mask: npt.NDArray[np.bool_]
-    ground_normal: npt.NDArray[np.float64]
+    ground: GroundPlane
+    camera: CameraOverFloor | None
+    prior_up_in_camera: npt.NDArray[np.float64] | None
+    ground_in_camera: GroundPlane | None
+    points_in: int
+    voxel_size_m: float
+    detect_ms: float
 
     @property
     def circles(self) -> list[Circle]:
         """Every cluster's circles, not inflated."""
         return [c for cluster in self.clusters for c in cluster.circles]
 
+    @property
+    def ground_normal(self) -> npt.NDArray[np.float64]:
+        """Normal of the ground plane in the map frame."""
+        return self.ground.normal
+
+
+def _known_plane(points_in_map, config: DetectionConfig, angle_deg: float) -> GroundPlane:
+    """The known ground ``z = ground_height`` and the share of points on it."""
+    on = np.abs(points_in_map[:, 2] - config.ground_height) < config.ground_clearance
+    fraction = float(on.mean()) if len(points_in_map) else 0.0
+    return GroundPlane(np.array([0.0, 0.0, 1.0]), -config.ground_height, fraction, angle_deg)
+
+
+def _to_map(
+    p: npt.NDArray[np.float64],
+    c: DetectionConfig,
+    camera: CameraOverFloor | None,
+    ground_plane: npt.ArrayLike | None,
+    rng: np.random.Generator,
+) -> tuple[npt.NDArray[np.float64], GroundPlane, CameraOverFloor, npt.NDArray, GroundPlane]:
+    """Camera-frame points in the map frame of their floor, and that floor."""
+    prior = camera or CameraOverFloor.from_angles()
+    prior_up = prior.up_in_camera
+    up_known = camera is not None or ground_plane is not None
+    if ground_plane is not None:
+        given = CameraOverFloor.from_plane(ground_plane)
+        prior = (
+            given
+            if camera is None
+            else CameraOverFloor(given.rotation_camera_to_map, given.height_m)
+        )
+    if c.ground == "ransac":
+        found = find_ground(
+            p,
+            prior.up_in_camera,
+            c.tilt_rad(up_known),
+            c.ransac_threshold,
+            c.ransac_iterations,
+            c.min_ground_fraction,
+            rng=rng,
+        )
+        floor = CameraOverFloor.from_up(found.normal, found.offset_m)
+        in_camera = GroundPlane(
+            found.normal,
+            found.offset_m,
+            found.inlier_fraction,
+            math.degrees(math.acos(float(np.clip(found.normal @ prior_up, -1, 1)))),
+            found.candidates,
+        )
+    else:
+        if c.ground == "plane" and prior.height_m == 0 and ground_plane is None:
+            raise ConfigError(
+                "ground 'plane' on a camera-frame cloud needs the camera's height over the "
+                "floor (--camera-height) or the plane (--ground-plane A B C D)"
+            )
+        floor = prior
+        up = floor.up_in_camera
+        angle = math.degrees(math.acos(float(np.clip(up @ prior_up, -1, 1))))
+        in_camera = GroundPlane(up, floor.height_m, 0.0, angle)
+    points_in_map = floor.to_map(p)
+    on = np.abs(points_in_map[:, 2]) < c.ransac_threshold
+    ground = GroundPlane(
+        np.array([0.0, 0.0, 1.0]),
+        0.0,
+        float(on.mean()),
+        in_camera.angle_to_up_deg,
+        in_camera.candidates,
+    )
+    if c.ground != "ransac":
+        in_camera = GroundPlane(
+            in_camera.normal, in_camera.offset_m, ground.inlier_fraction, in_camera.angle_to_up_deg
+        )
+    return points_in_map, ground, floor, prior_up, in_camera
+
 
 def detect_obstacles(
     points: npt.ArrayLike,
     frame: str = "camera",
     config: DetectionConfig | None = None,
-    robot_position: npt.ArrayLike = (0.0, 0.0, 0.0),
-    robot_rpy: npt.ArrayLike = (0.0, 0.0, 0.0),
-    camera_in_base: npt.ArrayLike = (0.0, 0.0, 0.0),
+    camera: CameraOverFloor | None = None,
+    ground_plane: npt.ArrayLike | None = None,
     rng: np.random.Generator | None = None,
 ) -> Detection:
     """Obstacles in a point cloud.
@@ -248,40 +306,65 @@ def detect_obstacles(
         points: Shape (n, 3) [m], in the camera (optical) frame or already in the map frame.
         frame: ``"camera"`` or ``"map"``.
         config: Detection settings.
-        robot_position: base_link in the map [m] (camera-frame input).
-        robot_rpy: base_link attitude in the map [rad] (camera-frame input).
-        camera_in_base: Camera origin in base_link [m] (camera-frame input).
+        camera: The camera's pose over the floor (camera-frame input); None: a level camera
+            at an unknown height.
+        ground_plane: Plane coefficients ``a b c d`` of the floor in the camera frame
+            (camera-frame input).
         rng: Random generator for RANSAC (seeded for repeatable results).
 
     Raises:
-        DatasetError: An empty cloud, or none left after filtering.
-        ConfigError: An unknown frame.
+        DatasetError: An empty cloud, none left after filtering, or no ground found.
+        ConfigError: An unknown frame, or the plane method without a known plane.
     """
+    started = time.perf_counter()
     c = config or DetectionConfig()
+    rng = rng or np.random.default_rng(0)
     p = np.asarray(points, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3 or len(p) == 0:
         raise DatasetError(f"the point cloud is empty or not of shape (n, 3): {p.shape}")
     p = p[np.all(np.isfinite(p), axis=1)]
+    points_in = len(p)
     if frame == "camera":
         p = p[(p[:, 2] > 0) & (p[:, 2] <= c.max_depth)]  # pass-through along the optical axis
-        p = camera_to_map(p, robot_position, robot_rpy, camera_in_base)
     elif frame != "map":
         raise ConfigError(f"frame must be 'camera' or 'map', got {frame!r}")
     if len(p) == 0:
         raise DatasetError("no point is left after the pass-through filter")
-    normal = np.array([0.0, 0.0, 1.0])
-    if c.ground == "plane":
-        keep = p[:, 2] > c.ground_height + c.ground_clearance
+    p = voxel_downsample(p, c.voxel_size)
+    floor: CameraOverFloor | None = None
+    prior_up = in_camera = None
+    if frame == "camera":
+        p, ground, floor, prior_up, in_camera = _to_map(p, c, camera, ground_plane, rng)
     elif c.ground == "ransac":
-        normal, _, inliers = ransac_plane(
-            p, c.ransac_threshold, c.ransac_iterations, rng or np.random.default_rng(0)
+        ground = find_ground(
+            p,
+            (0.0, 0.0, 1.0),
+            c.tilt_rad(True),
+            c.ransac_threshold,
+            c.ransac_iterations,
+            c.min_ground_fraction,
+            rng=rng,
         )
-        keep = ~inliers
     else:
-        keep = inverted_cone_points(p, c)
+        ground = _known_plane(p, c, 0.0)
+    height = ground.heights(p)
+    if c.ground == "cones":
+        keep = inverted_cone_points(p, c.cone_min_height, c.cone_max_height, c.cone_max_slope)
+        floor_points = ~keep
+    else:
+        keep = height > c.ground_clearance
+        floor_points = np.abs(height) <= max(c.ransac_threshold, 0.5 * c.ground_clearance)
     kept = p[keep]
-    clusters = [
-        describe_cluster(kept[idx])
-        for idx in euclidean_clusters(kept, c.cluster_tolerance, c.min_cluster_size)
-    ]
-    return Detection(clusters, p, keep, normal)
+    grid = FreeFloorGrid.build(kept[:, :2], p[floor_points, :2], c.split_cell)
+    clusters: list[ObstacleCluster] = []
+    for component, idx in enumerate(
+        euclidean_clusters(kept, c.cluster_tolerance, c.min_cluster_size)
+    ):
+        parts = split_cluster(
+            kept[idx], grid, describe_cluster, c.split_free_fraction, c.min_cluster_size
+        )
+        clusters.extend(replace(part, component=component) for part in parts)
+    detect_ms = 1000.0 * (time.perf_counter() - started)
+    return Detection(
+        clusters, p, keep, ground, floor, prior_up, in_camera, points_in, c.voxel_size, detect_ms
+    )

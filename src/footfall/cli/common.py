@@ -55,16 +55,41 @@ def add_cloud_options(p: argparse.ArgumentParser) -> None:
         "--frame",
         choices=("camera", "map"),
         default="camera",
-        help="frame the cloud's points are in",
+        help="frame the cloud's points are in: the optical camera frame (x right, y down, "
+        "z forward) or a z-up map frame",
     )
     p.add_argument(
         "--ground",
-        choices=("plane", "ransac", "cone"),
-        default="plane",
-        help="ground removal: known plane z = 0, RANSAC's dominant plane, or inverted cones",
+        choices=("ransac", "plane", "cones"),
+        default="ransac",
+        help="ground removal: the floor RANSAC finds near the expected up axis, a known plane "
+        "(the camera's height and pitch, or --ground-plane), or Manduchi's inverted cones",
     )
     p.add_argument(
-        "--camera-height", type=float, default=0.0, help="camera height above the ground in m"
+        "--camera-height", type=float, default=None, help="camera height above the floor in m"
+    )
+    p.add_argument(
+        "--camera-pitch-deg",
+        type=float,
+        default=None,
+        help="how far the camera looks down, in degrees (positive: down)",
+    )
+    p.add_argument(
+        "--camera-roll-deg",
+        type=float,
+        default=None,
+        help="how far the camera's right side dips, in degrees",
+    )
+    p.add_argument(
+        "--ground-plane",
+        type=float,
+        nargs=4,
+        metavar=("A", "B", "C", "D"),
+        default=None,
+        help="the floor a x + b y + c z + d = 0 in the camera frame (m)",
+    )
+    p.add_argument(
+        "--voxel-size", type=float, default=0.02, help="voxel grid side in m (0: every point)"
     )
     p.add_argument(
         "--cluster-tolerance", type=float, default=0.30, help="Euclidean clustering radius in m"
@@ -81,6 +106,10 @@ def cloud_request(args: argparse.Namespace):
         frame=args.frame,
         ground=args.ground,
         camera_height=args.camera_height,
+        camera_pitch_deg=args.camera_pitch_deg,
+        camera_roll_deg=args.camera_roll_deg,
+        ground_plane=None if args.ground_plane is None else tuple(args.ground_plane),
+        voxel_size=args.voxel_size,
         cluster_tolerance=args.cluster_tolerance,
         min_cluster_size=args.min_cluster_size,
     )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -10,6 +11,7 @@ from footfall.biped.obstacles import Detection, DetectionConfig, detect_obstacle
 from footfall.biped.planner import WalkPlan, plan_walk
 from footfall.errors import ConfigError
 from footfall.io.clouds import read_points
+from footfall.pointcloud.ground import CameraOverFloor, GroundPlane
 from footfall.reports import write_json
 
 
@@ -20,18 +22,34 @@ class CloudRequest:
     Attributes:
         cloud: A ``.pcd``, ``.ply`` or ``.npy`` file.
         frame: ``"camera"`` or ``"map"``: the frame the points are in.
-        ground: Ground removal: ``"plane"``, ``"ransac"`` or ``"cone"``.
-        camera_height: Camera height above the ground [m].
+        ground: Ground removal: ``"ransac"``, ``"plane"`` or ``"cones"``.
+        camera_height: Camera height above the floor [m]; None when not known.
+        camera_pitch_deg: How far the camera looks down [deg]; None when not known.
+        camera_roll_deg: How far its right side dips [deg]; None when not known.
+        ground_plane: The floor ``a x + b y + c z + d = 0`` in the camera frame.
+        voxel_size: Voxel grid side [m].
         cluster_tolerance: Euclidean clustering radius [m].
         min_cluster_size: Smallest obstacle [points].
     """
 
     cloud: Path
     frame: str = "camera"
-    ground: str = "plane"
-    camera_height: float = 0.0
+    ground: str = "ransac"
+    camera_height: float | None = None
+    camera_pitch_deg: float | None = None
+    camera_roll_deg: float | None = None
+    ground_plane: tuple[float, float, float, float] | None = None
+    voxel_size: float = 0.02
     cluster_tolerance: float = 0.30
     min_cluster_size: int = 5
+
+    def camera(self) -> CameraOverFloor | None:
+        """The camera's pose over the floor the request gives, or None."""
+        given = (self.camera_height, self.camera_pitch_deg, self.camera_roll_deg)
+        if all(v is None for v in given):
+            return None
+        height, pitch, roll = (0.0 if v is None else float(v) for v in given)
+        return CameraOverFloor.from_angles(height, math.radians(pitch), math.radians(roll))
 
 
 def detect(request: CloudRequest) -> Detection:
@@ -39,12 +57,24 @@ def detect(request: CloudRequest) -> Detection:
     points = read_points(request.cloud)
     config = DetectionConfig(
         ground=request.ground,
+        voxel_size=request.voxel_size,
         cluster_tolerance=request.cluster_tolerance,
         min_cluster_size=request.min_cluster_size,
     )
+    if request.frame == "map" and (request.camera() or request.ground_plane) is not None:
+        raise ConfigError("a camera pose or --ground-plane only applies to a camera-frame cloud")
     return detect_obstacles(
-        points, request.frame, config, camera_in_base=(0.0, 0.0, request.camera_height)
+        points, request.frame, config, camera=request.camera(), ground_plane=request.ground_plane
     )
+
+
+def _plane_json(plane: GroundPlane) -> dict[str, object]:
+    return {
+        "normal": [float(v) for v in plane.normal],
+        "offset_m": float(plane.offset_m),
+        "inlier_fraction": float(plane.inlier_fraction),
+        "angle_to_up_deg": float(plane.angle_to_up_deg),
+    }
 
 
 @dataclass(frozen=True)
@@ -75,17 +105,36 @@ class ObstacleReport:
                 },
                 "points": c.points,
                 "circles": [{"x": k.x, "y": k.y, "r": k.r} for k in c.circles],
+                "empty_fraction": c.empty_fraction,
+                "free_floor_fraction": c.free_floor_fraction,
+                "component": c.component,
             }
             for c in d.clusters
         ]
-        return {
+        ground = {**_plane_json(d.ground), "candidates": d.ground.candidates}
+        if d.ground_in_camera is not None:
+            ground["normal_in_camera"] = [float(v) for v in d.ground_in_camera.normal]
+            ground["offset_in_camera_m"] = float(d.ground_in_camera.offset_m)
+        out: dict[str, object] = {
             "cloud": str(self.request.cloud),
             "frame": self.request.frame,
             "ground": self.request.ground,
+            "ground_plane": ground,
+            "voxel_size_m": d.voxel_size_m,
+            "points_in": d.points_in,
+            "points_after_voxel": len(d.points_in_map),
             "points": len(d.points_in_map),
             "obstacle_points": int(d.obstacle_mask.sum()),
+            "detect_ms": d.detect_ms,
             "clusters": clusters,
         }
+        if d.camera is not None:
+            out["camera"] = {
+                "height_m": d.camera.height_m,
+                "pitch_deg": math.degrees(d.camera.pitch_rad),
+                "roll_deg": math.degrees(d.camera.roll_rad),
+            }
+        return out
 
     def write(self, out: Path) -> list[Path]:
         """Write ``obstacles.json`` and ``obstacles.png`` to ``out``."""

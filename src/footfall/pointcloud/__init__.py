@@ -1,0 +1,1 @@
+"""Point clouds: downsampling, clustering, ground planes."""
