@@ -12,7 +12,7 @@ from footfall.cli.common import format_value, print_table, sim_progress, wrote
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``map``."""
-    from footfall.reports.map import REAL_MAX_CELL_SPREAD
+    from footfall.sensing.noise import SENSORS
     from footfall.sim.terrain import TERRAIN_NAMES
 
     p = subparsers.add_parser(
@@ -21,7 +21,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         description=(
             "Walk the simulated hexapod across a terrain while its depth camera builds the "
             "rolling height map, or map a recorded TUM-layout sequence (--tum). Writes "
-            "heightmap.png, scoremap.png and metrics.json to --out."
+            "heightmap.png, scoremap.png, metrics.json and map.npz to --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -47,19 +47,47 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--fusion",
         choices=("latest", "max", "variance"),
-        default="latest",
-        help="per-cell fusion rule",
+        default=None,
+        help="per-cell fusion rule (default: latest in simulation; variance, the sensor's "
+        "noise averaged down over frames, for a recording)",
     )
     p.add_argument(
         "--max-cell-spread",
         type=float,
         default=None,
-        help="height range in m within one cell in one frame (beyond its slope) above which "
-        "the cell straddles an edge; default: the score's for the simulated camera, "
-        f"{REAL_MAX_CELL_SPREAD} for a recorded sequence (a real sensor's noise spans mm)",
+        help="height range in m within one cell in one frame, beyond its slope and the "
+        "sensor's noise, above which the cell straddles an edge (default: the score's)",
     )
     p.add_argument(
-        "--tum", type=Path, default=None, help="map this TUM-layout sequence instead of simulating"
+        "--tum",
+        type=Path,
+        default=None,
+        help="map this TUM-layout sequence instead of simulating; with --camera-height, also "
+        "one depth PNG or a folder of them taken from that pose",
+    )
+    p.add_argument(
+        "--sensor",
+        choices=tuple(SENSORS),
+        default="kinect",
+        help="the recording's depth sensor class, for its noise model (with --tum)",
+    )
+    p.add_argument(
+        "--camera-height",
+        type=float,
+        default=None,
+        help="camera height over the floor in m, for frames without a trajectory (with --tum)",
+    )
+    p.add_argument(
+        "--camera-pitch-deg",
+        type=float,
+        default=None,
+        help="how far that camera looks down, in degrees",
+    )
+    p.add_argument(
+        "--camera-roll-deg",
+        type=float,
+        default=None,
+        help="how far that camera's right side dips, in degrees",
     )
     p.add_argument(
         "--intrinsics",
@@ -100,6 +128,10 @@ def run(args: argparse.Namespace, console: Console) -> int:
         intrinsics=tuple(args.intrinsics),
         up=tuple(args.up),
         depth_scale=args.depth_scale,
+        sensor=args.sensor,
+        camera_height=args.camera_height,
+        camera_pitch_deg=args.camera_pitch_deg,
+        camera_roll_deg=args.camera_roll_deg,
     )
     if args.tum is not None:
         console.print(f"Mapping recorded sequence {args.tum}")

@@ -30,7 +30,11 @@ def read_trajectory_log(path: str | Path) -> list[npt.NDArray[np.float64]]:
     p = Path(path)
     if not p.is_file():
         raise DatasetError(f"missing {p}")
-    lines = [line.split() for line in p.read_text().splitlines() if line.strip()]
+    try:
+        text = p.read_text()
+    except UnicodeDecodeError as exc:
+        raise DatasetError(f"{p}: not a text file ({exc})") from exc
+    lines = [line.split() for line in text.splitlines() if line.strip()]
     if len(lines) % 5:
         raise DatasetError(f"{p}: {len(lines)} lines is not a whole number of 5-line blocks")
     matrices = []

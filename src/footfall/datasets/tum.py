@@ -54,7 +54,11 @@ def _read_table(path: Path, columns: int) -> list[list[str]]:
     if not path.is_file():
         raise DatasetError(f"missing {path.name} in {path.parent}")
     rows = []
-    for number, line in enumerate(path.read_text().splitlines(), start=1):
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError as exc:
+        raise DatasetError(f"{path}: not a text file ({exc})") from exc
+    for number, line in enumerate(text.splitlines(), start=1):
         line = line.strip()
         if not line or line.startswith("#"):
             continue
@@ -114,6 +118,37 @@ def read_tum_sequence(
     return frames, skipped
 
 
+def read_fixed_view(path: str | Path, camera_pose: Pose, fps: float = 30.0) -> list[SequenceFrame]:
+    """Depth frames all taken from one known camera pose (no trajectory).
+
+    Args:
+        path: One depth PNG; or a folder with ``depth.txt``, else ``depth/*.png``, else
+            ``*depth*.png`` (stamped ``i / fps``).
+        camera_pose: The optical frame's pose in the (z-up) world.
+        fps: Frame rate for files without timestamps [Hz].
+
+    Raises:
+        DatasetError: No depth image at ``path``.
+    """
+    p = Path(path)
+    if p.is_file():
+        return [SequenceFrame(0.0, p, camera_pose, 0.0)]
+    if not p.is_dir():
+        raise DatasetError(f"missing depth image or sequence {p}")
+    if (p / "depth.txt").is_file():
+        rows = _read_table(p / "depth.txt", 2)
+        try:
+            stamped = sorted((float(r[0]), p / r[1]) for r in rows)
+        except ValueError as exc:
+            raise DatasetError(f"{p / 'depth.txt'}: a timestamp is not a number ({exc})") from exc
+    else:
+        files = sorted((p / "depth").glob("*.png")) or sorted(p.glob("*depth*.png"))
+        stamped = [(k / fps, f) for k, f in enumerate(files)]
+    if not stamped:
+        raise DatasetError(f"no depth image in {p} (depth.txt, depth/*.png or *depth*.png)")
+    return [SequenceFrame(t, f, camera_pose, 0.0) for t, f in stamped]
+
+
 def load_depth_png(path: str | Path) -> npt.NDArray[np.uint16]:
     """A 16-bit depth PNG as an array of depth units.
 
@@ -123,13 +158,45 @@ def load_depth_png(path: str | Path) -> npt.NDArray[np.uint16]:
     p = Path(path)
     if not p.is_file():
         raise DatasetError(f"missing depth image {p}")
-    with Image.open(p) as image:
-        array = np.array(image)
+    try:
+        with Image.open(p) as image:
+            array = np.array(image)
+    except (OSError, ValueError, SyntaxError) as exc:  # PIL's kinds of unreadable image
+        raise DatasetError(f"{p}: not a readable image ({exc})") from exc
     if array.ndim != 2 or array.dtype not in (np.uint16, np.int32):
         raise DatasetError(
             f"{p} is not a 16-bit single-channel depth image (got {array.dtype}, {array.shape})"
         )
     return array.astype(np.uint16)
+
+
+def check_depth_units(depth: npt.NDArray, depth_scale: float, path: str | Path) -> None:
+    """Refuse a depth image that is not plausible metres under ``depth_scale``.
+
+    Raises:
+        DatasetError: Next to no reading; a median depth outside 0.25-12 m (millimetres
+            read as TUM units, raw disparity); or neighbouring pixels that jump by 5 %
+            of the depth as a rule (bytes swapped or bits rotated), naming the file.
+    """
+    d = np.asarray(depth)
+    readings = d[d > 0]
+    if readings.size < 0.01 * d.size:
+        raise DatasetError(f"{path}: holds almost no depth reading ({readings.size} pixels)")
+    median_m = float(np.median(readings)) * depth_scale
+    if not 0.25 <= median_m <= 12.0:
+        raise DatasetError(
+            f"{path}: median depth {median_m:.3g} m at {depth_scale:g} m per unit is not a "
+            "plausible scene (millimetres read as TUM units? raw disparity?): check --depth-scale"
+        )
+    left, right = d[:, :-1].astype(np.float64), d[:, 1:].astype(np.float64)
+    both = (left > 0) & (right > 0)
+    if both.sum() > 100:
+        jump = np.abs(left[both] - right[both]) / np.maximum(left[both], right[both])
+        if float(np.median(jump)) > 0.05:
+            raise DatasetError(
+                f"{path}: neighbouring pixels differ by {np.median(jump):.0%} of their depth as "
+                "a rule: not a depth image in this convention (bytes swapped? bits rotated?)"
+            )
 
 
 def up_to_z(up: npt.ArrayLike) -> Rotation:
@@ -159,43 +226,102 @@ class SequenceMap:
     metrics: dict[str, object]
 
 
-def floor_flatness(snapshot: MapSnapshot, band: float = 0.03) -> dict[str, float | int]:
-    """Spread of the floor's cell heights.
+def floor_level(heights: npt.ArrayLike, bin_m: float = 0.01, min_share: float = 0.25) -> float:
+    """The floor's height: the lowest strong mode of the height histogram [m].
 
-    The floor is the lowest well-populated height level; its cells are those within
-    ``band`` of that level [m].
+    The histogram's modes (1 cm bins, smoothed over three) holding at least ``min_share``
+    of the largest one's cells are the big level surfaces; the floor is the lowest of them.
+    Not the lowest populated bin: a real sensor scatters a few cells below the floor
+    (reflections, holes), and those must not pull the level down; and not simply the
+    largest mode, which in an office can be the desk.
     """
-    heights = snapshot.heights[snapshot.known]
-    if heights.size == 0:
+    h = np.asarray(heights, dtype=np.float64)
+    h = h[np.isfinite(h)]
+    if h.size == 0:
+        raise DatasetError("no known cell to find the floor in")
+    bins = np.arange(h.min(), h.max() + 2 * bin_m, bin_m)
+    if bins.size < 4:
+        return float(np.median(h))
+    counts, edges = np.histogram(h, bins=bins)
+    smooth = np.convolve(counts, np.ones(3), mode="same")
+    padded = np.r_[-1.0, smooth, -1.0]
+    peaks = np.flatnonzero((smooth >= padded[:-2]) & (smooth >= padded[2:]))
+    strong = peaks[smooth[peaks] >= min_share * smooth.max()]
+    k = int(strong[0])
+    near = h[(h >= edges[k] - bin_m) & (h <= edges[k + 1] + bin_m)]
+    return float(np.median(near))
+
+
+def _all_around(mask: npt.NDArray[np.bool_], reach: int) -> npt.NDArray[np.bool_]:
+    """Cells whose whole (2 reach + 1)^2 window lies in ``mask`` (outside counts as not)."""
+    padded = np.pad(mask, reach, constant_values=False)
+    out = np.ones_like(mask)
+    n, m = mask.shape
+    for di in range(2 * reach + 1):
+        for dj in range(2 * reach + 1):
+            out &= padded[di : di + n, dj : dj + m]
+    return out
+
+
+def floor_flatness(
+    snapshot: MapSnapshot,
+    valid: npt.ArrayLike | None = None,
+    band: float = 0.03,
+    window_cells: int = 5,
+) -> dict[str, float | int]:
+    """Spread of the floor's cell heights, and how much of the open floor scores valid.
+
+    The floor is the lowest strong mode of the height histogram (:func:`floor_level`); its
+    cells are those within ``band`` of that level [m]. The open floor is the floor cells
+    whose whole score window
+    (``window_cells`` square) is floor too: away from the furniture, whose nearness makes a
+    cell invalid by design, and from the edge of what was seen. A flat floor that a
+    sensor's noise does not fool scores valid there.
+
+    Args:
+        snapshot: The map.
+        valid: The score map's valid cells, shape (N, N), for the valid fractions.
+        band: Half-width of the floor band [m].
+        window_cells: Side of the score's window [cells].
+    """
+    if not snapshot.known.any():
         return {"floor_cells": 0}
-    bins = np.arange(heights.min(), heights.max() + 0.01, 0.01)
-    if bins.size < 2:
-        level = float(np.median(heights))
-    else:
-        counts, edges = np.histogram(heights, bins=bins)
-        populated = np.flatnonzero(counts >= 0.05 * counts.max())
-        level = float(0.5 * (edges[populated[0]] + edges[populated[0] + 1]))
-    floor = heights[np.abs(heights - level) <= band]
-    return {
+    level = floor_level(snapshot.heights[snapshot.known])
+    heights = np.nan_to_num(snapshot.heights, nan=np.inf)
+    on_floor = snapshot.known & (np.abs(heights - level) <= band)
+    floor = snapshot.heights[on_floor]
+    out: dict[str, float | int] = {
         "floor_cells": int(floor.size),
         "floor_height_median_m": float(np.median(floor)),
         "floor_height_std_m": float(np.std(floor)),
         "floor_height_spread_m": float(np.percentile(floor, 95) - np.percentile(floor, 5)),
     }
+    if valid is not None:
+        v = np.asarray(valid, dtype=bool)
+        open_floor = _all_around(on_floor, window_cells // 2)
+        out["floor_cells_open"] = int(open_floor.sum())
+        out["floor_valid_fraction"] = float(v[open_floor].mean()) if open_floor.any() else 0.0
+        out["floor_valid_fraction_all"] = float(v[on_floor].mean())
+    return out
 
 
 class TumSequenceSource:
     """A recorded sequence as the camera and pose source of a graph.
 
     Each frame goes out as its pose estimate (the recorded camera pose, turned so the
-    world's up axis is +z; the camera is the body) followed by its depth image.
+    world's up axis is +z; the camera is the body) followed by its depth image. Without a
+    trajectory, every frame is taken from one known camera pose, and the map centres a
+    little ahead of the camera, on what it sees.
 
     Args:
         bus: The bus.
-        folder: TUM-layout sequence.
-        camera: Depth intrinsics.
-        up: The world's up axis in the sequence's coordinates.
+        folder: TUM-layout sequence, or (with ``camera_pose``) a depth PNG or a folder of them.
+        camera: Depth intrinsics (with the sensor's noise model).
+        up: The world's up axis in the sequence's coordinates (ignored with ``camera_pose``).
         depth_scale: Metres per depth unit.
+        camera_pose: The optical frame's fixed pose in a z-up world, for frames without a
+            trajectory.
+        look_ahead_m: How far ahead of a fixed camera the map centres [m].
 
     Raises:
         DatasetError: Missing or malformed files, or no frame with a pose.
@@ -210,22 +336,37 @@ class TumSequenceSource:
         camera: PinholeCamera,
         up: npt.ArrayLike,
         depth_scale: float = TUM_DEPTH_SCALE,
+        camera_pose: Pose | None = None,
+        look_ahead_m: float = 2.0,
     ) -> None:
         self.bus = bus
         self.camera = camera
         self.depth_scale = depth_scale
+        if camera_pose is not None:
+            self.frames, self.skipped = read_fixed_view(folder, camera_pose), 0
+            self.poses = [camera_pose for _ in self.frames]
+            forward = camera_pose.rotation.apply([0.0, 0.0, 1.0])
+            forward[2] = 0.0
+            norm = float(np.linalg.norm(forward))
+            ahead = forward / norm * look_ahead_m if norm > 1e-9 else np.zeros(3)
+            centre = Pose(camera_pose.position + ahead, camera_pose.rotation)
+            self.centres = [centre for _ in self.frames]
+            return
         self.frames, self.skipped = read_tum_sequence(folder)
         if not self.frames:
             raise DatasetError(f"{folder}: no depth frame has a pose within tolerance")
         align = Pose(np.zeros(3), up_to_z(up))
         self.poses = [align.compose(f.camera_pose) for f in self.frames]
+        self.centres = self.poses
 
     def play(self) -> int:
         """Publish every frame, as fast as they load; returns how many."""
         camera_in_body = Pose(np.zeros(3), Rotation.identity())
-        for number, (frame, pose) in enumerate(zip(self.frames, self.poses, strict=True), 1):
+        frames = zip(self.frames, self.poses, self.centres, strict=True)
+        for number, (frame, pose, centre) in enumerate(frames, 1):
             depth = load_depth_png(frame.depth_path)
-            self.bus.publish(PoseEstimate.TOPIC, PoseEstimate(frame.timestamp, pose, pose))
+            check_depth_units(depth, self.depth_scale, frame.depth_path)
+            self.bus.publish(PoseEstimate.TOPIC, PoseEstimate(frame.timestamp, pose, centre))
             image = DepthFrame(
                 frame.timestamp, depth, self.camera, camera_in_body, self.depth_scale, number
             )
@@ -241,6 +382,7 @@ def map_tum_sequence(
     score_config: ScoreConfig | None = None,
     depth_scale: float = TUM_DEPTH_SCALE,
     stride: int = 1,
+    camera_pose: Pose | None = None,
 ) -> SequenceMap:
     """Build the height map of a recorded sequence, following the camera.
 
@@ -252,13 +394,15 @@ def map_tum_sequence(
         score_config: Score settings.
         depth_scale: Metres per depth unit.
         stride: Use every ``stride``-th pixel row and column.
+        camera_pose: The camera's fixed pose in a z-up world, for frames without a
+            trajectory.
 
     Returns:
         The map, its scores, the camera path and metrics.
     """
     bus = InProcessBus()
-    source = TumSequenceSource(bus, folder, camera, up, depth_scale)
-    start = source.poses[0].position
+    source = TumSequenceSource(bus, folder, camera, up, depth_scale, camera_pose)
+    start = source.centres[0].position
     mapping = MappingNode(
         bus,
         map_config,
@@ -280,6 +424,6 @@ def map_tum_sequence(
         "cells_known": int(snapshot.known.sum()),
         "pixels_dropped": mapping.pixels_dropped,
         "points_outside_map": mapping.points_outside,
-        **floor_flatness(snapshot),
+        **floor_flatness(snapshot, scores.valid, window_cells=mapping.score_config.kernel_size),
     }
     return SequenceMap(snapshot, scores, path, metrics)

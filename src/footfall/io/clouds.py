@@ -31,10 +31,13 @@ def read_points(path: str | Path) -> npt.NDArray[np.float64]:
             points = np.stack(
                 [np.asarray(vertex[k], dtype=np.float64) for k in ("x", "y", "z")], axis=1
             )
-        except (KeyError, ValueError) as exc:
+        except Exception as exc:  # plyfile's parser raises many kinds on a broken file
             raise DatasetError(f"{p}: no readable x, y, z vertex data ({exc})") from exc
     elif suffix == ".npy":
-        points = np.asarray(np.load(p), dtype=np.float64)
+        try:
+            points = np.asarray(np.load(p, allow_pickle=False), dtype=np.float64)
+        except Exception as exc:  # NumPy's header parser raises many kinds on a broken file
+            raise DatasetError(f"{p}: not a readable NumPy array ({exc})") from exc
         if points.ndim != 2 or points.shape[1] < 3:
             raise DatasetError(f"{p}: expected an array of shape (n, 3), got {points.shape}")
         points = points[:, :3]

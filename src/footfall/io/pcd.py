@@ -74,6 +74,8 @@ def lzf_decompress(data: npt.NDArray[np.uint8], out_size: int) -> npt.NDArray[np
         else:  # a back reference
             length = ctrl >> 5
             ref = op - ((ctrl & 0x1F) << 8) - 1
+            if ip + (2 if length == 7 else 1) > n:
+                raise ValueError("corrupt LZF stream: back reference cut short")
             if length == 7:
                 length += np.int64(data[ip])
                 ip += 1
@@ -123,12 +125,36 @@ def read_pcd(path: str | Path) -> PointCloudData:
         points = int(header.get("POINTS", [str(width * height)])[0])
         kind = header["DATA"][0].lower()
         dtypes = [_TYPES[(t.upper(), s)] for t, s in zip(types, sizes, strict=True)]
+        viewpoint = tuple(
+            float(v) for v in header.get("VIEWPOINT", ["0", "0", "0", "1", "0", "0", "0"])
+        )
     except (KeyError, ValueError, IndexError) as exc:
         raise DatasetError(f"{p}: malformed or unsupported PCD header ({exc})") from exc
-    viewpoint = tuple(
-        float(v) for v in header.get("VIEWPOINT", ["0", "0", "0", "1", "0", "0", "0"])
-    )
+    if points < 0 or width < 0 or height < 0 or points != width * height:
+        raise DatasetError(
+            f"{p}: header says {points} points but WIDTH x HEIGHT is {width} x {height}"
+        )
+    try:
+        fields = _read_data(p, raw, offset, kind, names, dtypes, counts, sizes, points)
+    except (ValueError, TypeError, IndexError, OverflowError, UnicodeDecodeError) as exc:
+        raise DatasetError(f"{p}: malformed {kind} point data ({exc})") from exc
+    return PointCloudData(fields, width, height, viewpoint)
+
+
+def _read_data(
+    p: Path,
+    raw: bytes,
+    offset: int,
+    kind: str,
+    names: list[str],
+    dtypes: list[str],
+    counts: list[int],
+    sizes: list[int],
+    points: int,
+) -> dict[str, npt.NDArray]:
+    """The fields of a PCD file's data section."""
     fields: dict[str, npt.NDArray] = {}
+    record_size = sum(c * s for c, s in zip(counts, sizes, strict=True))
     if kind == "ascii":
         rows = raw[offset:].decode("ascii").split()
         columns = sum(counts)
@@ -152,8 +178,22 @@ def read_pcd(path: str | Path) -> PointCloudData:
         data = np.frombuffer(raw, dtype=record, count=points, offset=offset)
         fields = {n: np.array(data[n]) for n in names}
     elif kind == "binary_compressed":
-        compressed_size, size = np.frombuffer(raw, dtype="<u4", count=2, offset=offset)
-        body = np.frombuffer(raw, dtype=np.uint8, count=int(compressed_size), offset=offset + 8)
+        if len(raw) - offset < 8:
+            raise DatasetError(f"{p}: binary_compressed data ends before its sizes")
+        compressed_size, size = (int(v) for v in np.frombuffer(raw, "<u4", count=2, offset=offset))
+        if len(raw) - offset - 8 < compressed_size:
+            raise DatasetError(
+                f"{p}: truncated compressed data: {len(raw) - offset - 8} of "
+                f"{compressed_size} bytes"
+            )
+        if size != points * record_size:
+            raise DatasetError(
+                f"{p}: header says {points} points ({points * record_size} bytes) but the "
+                f"compressed data holds {size}"
+            )
+        if size > 200 * compressed_size + 1024:  # beyond what LZF can expand to
+            raise DatasetError(f"{p}: {compressed_size} compressed bytes cannot hold {size}")
+        body = np.frombuffer(raw, dtype=np.uint8, count=compressed_size, offset=offset + 8)
         try:
             data = lzf_decompress(body, int(size))
         except ValueError as exc:
@@ -168,4 +208,4 @@ def read_pcd(path: str | Path) -> PointCloudData:
         raise DatasetError(
             f"{p}: unsupported DATA kind {kind!r} (ascii, binary, binary_compressed)"
         )
-    return PointCloudData(fields, width, height, viewpoint)
+    return fields

@@ -9,12 +9,19 @@ never a copy of the map. Erased cells become unknown.
 
 Fusion of a new frame (``HeightMapConfig.fusion``): within one frame, each cell takes the
 highest point that falls in it (the top of whatever is there: the side of a box seen at a
-slant is lower than its top). Across frames:
+slant is lower than its top), or for a noisy camera the mean of its points (the highest
+would be the top of the noise). Across frames:
 
 - ``latest`` (default, the thesis' rule): the newest frame's value replaces the cell;
 - ``max``: the highest value ever seen stays;
-- ``variance``: a scalar Kalman update whose measurement noise grows with the square of
-  the range, gated so a value far off the estimate (the scene changed) replaces it.
+- ``variance``: a scalar Kalman update whose measurement noise is the camera's
+  (:mod:`footfall.sensing.noise`; for an ideal camera ``range_noise * r^2``), gated so a
+  value far off the estimate (the scene changed) replaces it. Over frames a real floor's
+  noise averages down.
+
+Each cell also keeps the largest height range of its points within one frame beyond what
+the camera's noise explains (``noise_spread_sigmas`` standard deviations): a cell that
+straddles an edge shows it, a noisy flat floor does not.
 
 Invalid readings (no return, NaN, out of range) never touch the map; neither do points
 outside the window, which are counted.
@@ -31,6 +38,7 @@ import numpy.typing as npt
 from footfall.errors import ConfigError
 from footfall.mapping import kernels
 from footfall.sensing.camera import DepthStats, PinholeCamera
+from footfall.sensing.noise import IDEAL, DepthNoiseModel
 from footfall.sensing.pose import Pose
 
 
@@ -61,6 +69,8 @@ class HeightMapConfig:
             of a reading at range r is ``range_noise * r^2`` [1/m].
         process_noise: Standard deviation added to a cell per update (``variance``) [m].
         gate: Innovation gate of the ``variance`` rule [standard deviations].
+        noise_spread_sigmas: In-frame height range of a cell the camera's noise alone
+            explains [standard deviations of the noise at the cell's range].
     """
 
     size: int = 256
@@ -69,6 +79,7 @@ class HeightMapConfig:
     range_noise: float = 0.003
     process_noise: float = 0.002
     gate: float = 4.0
+    noise_spread_sigmas: float = 6.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "fusion", FusionRule(self.fusion))
@@ -106,8 +117,11 @@ class MapSnapshot:
         heights: Shape (N, N) [m]; NaN where unknown.
         known: Shape (N, N).
         spread: Largest height range of the points that fell in each cell in one frame,
-            shape (N, N) [m]; NaN where unknown. A cell that straddles an edge or a narrow
-            groove has a large spread even when its height looks flat.
+            beyond what the camera's noise explains, shape (N, N) [m]; NaN where unknown.
+            A cell that straddles an edge or a narrow groove has a large spread even when
+            its height looks flat.
+        variance: Variance of each cell's height, shape (N, N) [m^2]; NaN where unknown
+            (the fused estimate's for ``variance`` fusion, else the last reading's).
         origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
         resolution: Cell side [m].
     """
@@ -117,6 +131,7 @@ class MapSnapshot:
     origin: tuple[float, float]
     resolution: float
     spread: npt.NDArray[np.float64] | None = None
+    variance: npt.NDArray[np.float64] | None = None
 
     @property
     def size(self) -> int:
@@ -159,6 +174,8 @@ class HeightMap:
         self._frame_h = np.zeros((n, n), dtype=np.float64)
         self._frame_lo = np.zeros((n, n), dtype=np.float64)
         self._frame_r2 = np.zeros((n, n), dtype=np.float64)
+        self._frame_sum = np.zeros((n, n), dtype=np.float64)
+        self._frame_n = np.zeros((n, n), dtype=np.int64)
         self._stamp = np.zeros((n, n), dtype=np.int64)
         self._touched = np.zeros(n * n, dtype=np.int64)
         self._frame_id = 0
@@ -232,7 +249,7 @@ class HeightMap:
         self._frame_id += 1
         return self._frame_id
 
-    def _fuse(self, n_touched: int) -> None:
+    def _fuse(self, n_touched: int, noise: DepthNoiseModel = IDEAL) -> None:
         c = self.config
         kernels.fuse(
             self._touched,
@@ -240,6 +257,8 @@ class HeightMap:
             self._frame_h,
             self._frame_lo,
             self._frame_r2,
+            self._frame_sum,
+            self._frame_n,
             self.heights,
             self.spread,
             self.variance,
@@ -248,6 +267,8 @@ class HeightMap:
             c.range_noise,
             c.process_noise,
             c.gate,
+            np.array([noise.base_m, noise.quadratic_per_m, noise.offset_m]),
+            c.noise_spread_sigmas,
         )
 
     def integrate_depth(
@@ -294,12 +315,14 @@ class HeightMap:
             self._frame_h,
             self._frame_lo,
             self._frame_r2,
+            self._frame_sum,
+            self._frame_n,
             self._stamp,
             self._next_frame(),
             self._touched,
             counts,
         )
-        self._fuse(n_touched)
+        self._fuse(n_touched, camera.noise)
         return self._stats(counts, n_touched)
 
     def integrate_points(
@@ -323,6 +346,8 @@ class HeightMap:
             self._frame_h,
             self._frame_lo,
             self._frame_r2,
+            self._frame_sum,
+            self._frame_n,
             self._stamp,
             self._next_frame(),
             self._touched,
@@ -353,6 +378,7 @@ class HeightMap:
         known = np.roll(self.known, shift, axis=(0, 1))
         heights = np.where(known, np.roll(self.heights, shift, axis=(0, 1)), np.nan)
         spread = np.where(known, np.roll(self.spread, shift, axis=(0, 1)), np.nan)
+        variance = np.where(known, np.roll(self.variance, shift, axis=(0, 1)), np.nan)
         origin = (
             float(self.origin[0] * self.config.resolution),
             float(self.origin[1] * self.config.resolution),
@@ -363,4 +389,5 @@ class HeightMap:
             origin=origin,
             resolution=self.config.resolution,
             spread=spread,
+            variance=variance,
         )

@@ -16,6 +16,9 @@ from numba import njit
 VALID, ZERO, NON_FINITE, NEGATIVE, OUT_OF_RANGE, OUTSIDE = range(6)
 N_COUNTS = 6
 
+# Points of one cell in one frame whose noise counts as independent (a 3 x 3 patch).
+MAX_INDEPENDENT_POINTS = 9
+
 # Fusion rules, as integers for the compiled code.
 FUSE_LATEST, FUSE_MAX, FUSE_VARIANCE = 0, 1, 2
 
@@ -32,6 +35,8 @@ def _bin_point(
     frame_h,
     frame_lo,
     frame_r2,
+    frame_sum,
+    frame_n,
     stamp,
     frame_id,
     touched,
@@ -57,6 +62,8 @@ def _bin_point(
         frame_h[bi, bj] = wz
         frame_lo[bi, bj] = wz
         frame_r2[bi, bj] = r2
+        frame_sum[bi, bj] = wz
+        frame_n[bi, bj] = 1
         touched[n_touched] = bi * n + bj
         n_touched += 1
     else:
@@ -66,6 +73,8 @@ def _bin_point(
             frame_lo[bi, bj] = wz
         if r2 < frame_r2[bi, bj]:
             frame_r2[bi, bj] = r2
+        frame_sum[bi, bj] += wz
+        frame_n[bi, bj] += 1
     return n_touched
 
 
@@ -87,6 +96,8 @@ def bin_depth(
     frame_h,
     frame_lo,
     frame_r2,
+    frame_sum,
+    frame_n,
     stamp,
     frame_id,
     touched,
@@ -142,6 +153,8 @@ def bin_depth(
                 frame_h[bi, bj] = wz
                 frame_lo[bi, bj] = wz
                 frame_r2[bi, bj] = r2
+                frame_sum[bi, bj] = wz
+                frame_n[bi, bj] = 1
                 touched[n_touched] = bi * n + bj
                 n_touched += 1
             else:
@@ -151,6 +164,8 @@ def bin_depth(
                     frame_lo[bi, bj] = wz
                 if r2 < frame_r2[bi, bj]:
                     frame_r2[bi, bj] = r2
+                frame_sum[bi, bj] += wz
+                frame_n[bi, bj] += 1
             valid += 1
     counts[VALID] += valid
     counts[OUTSIDE] += outside
@@ -159,7 +174,19 @@ def bin_depth(
 
 @njit(cache=True)
 def bin_points(
-    points, sensor, inv_res, origin, frame_h, frame_lo, frame_r2, stamp, frame_id, touched, counts
+    points,
+    sensor,
+    inv_res,
+    origin,
+    frame_h,
+    frame_lo,
+    frame_r2,
+    frame_sum,
+    frame_n,
+    stamp,
+    frame_id,
+    touched,
+    counts,
 ):
     """Keep each cell's highest world point; non-finite points are counted and skipped."""
     n = frame_h.shape[0]
@@ -181,6 +208,8 @@ def bin_points(
             frame_h,
             frame_lo,
             frame_r2,
+            frame_sum,
+            frame_n,
             stamp,
             frame_id,
             touched,
@@ -201,6 +230,8 @@ def fuse(
     frame_h,
     frame_lo,
     frame_r2,
+    frame_sum,
+    frame_n,
     heights,
     spread,
     variance,
@@ -209,38 +240,61 @@ def fuse(
     range_noise,
     process_noise,
     gate,
+    noise,
+    spread_sigmas,
 ):
     """Fuse the frame's per-cell heights into the map by ``rule``.
 
     ``FUSE_LATEST`` replaces, ``FUSE_MAX`` keeps the highest, ``FUSE_VARIANCE`` is a scalar
-    Kalman update with measurement noise ``range_noise * r^2`` (r the nearest range seen in
-    the cell) and ``process_noise`` added per update; a measurement more than ``gate``
-    standard deviations off replaces the cell (the scene changed).
+    Kalman update whose measurement noise is the sensor's at the nearest range seen in
+    the cell (``noise`` = base, quadratic, offset of :class:`DepthNoiseModel`; for an ideal
+    sensor ``range_noise * r^2``), with ``process_noise`` added per update; a measurement
+    more than ``gate`` standard deviations off replaces the cell (the scene changed).
+
+    A cell's ``spread`` is the largest in-frame height range of its points beyond
+    ``spread_sigmas`` times the sensor's noise (the noise alone spans that much).
+
+    An ideal sensor's cell takes the frame's highest point (the top of what is there); a
+    noisy sensor's takes the mean of its points, whose noise is the reading's over the
+    square root of their number (at most ``MAX_INDEPENDENT_POINTS``: neighbouring pixels
+    share their noise, through disparity quantization and the sensor's matching window),
+    where the highest point would be the top of the noise.
     """
     n = heights.shape[0]
+    ideal = noise[0] == 0.0 and noise[1] == 0.0
     for k in range(n_touched):
         i = touched[k] // n
         j = touched[k] % n
-        z = frame_h[i, j]
+        if ideal:
+            z = frame_h[i, j]
+            sensor_sigma = 0.0
+            # An exact reading has no variance; the variance rule still needs a prior one.
+            s = range_noise * frame_r2[i, j] if rule == FUSE_VARIANCE else 0.0
+            m_var = s * s
+        else:
+            count = frame_n[i, j]
+            z = frame_sum[i, j] / count
+            d = math.sqrt(frame_r2[i, j]) - noise[2]
+            sensor_sigma = noise[0] + noise[1] * d * d
+            m_var = sensor_sigma * sensor_sigma / min(count, MAX_INDEPENDENT_POINTS)
         # The largest height range seen inside the cell: an edge or a groove shows itself in
         # some views and hides (occluded) in others.
-        frame_spread = z - frame_lo[i, j]
+        frame_spread = max(frame_h[i, j] - frame_lo[i, j] - spread_sigmas * sensor_sigma, 0.0)
         if not known[i, j] or frame_spread > spread[i, j]:
             spread[i, j] = frame_spread
         if not known[i, j]:
             heights[i, j] = z
-            s = range_noise * frame_r2[i, j]
-            variance[i, j] = s * s
+            variance[i, j] = m_var
             known[i, j] = True
             continue
         if rule == FUSE_LATEST:
             heights[i, j] = z
+            variance[i, j] = m_var
         elif rule == FUSE_MAX:
             if z > heights[i, j]:
                 heights[i, j] = z
+                variance[i, j] = m_var
         else:
-            s = range_noise * frame_r2[i, j]
-            m_var = s * s
             p_var = variance[i, j] + process_noise * process_noise
             innovation = z - heights[i, j]
             if innovation * innovation > gate * gate * (p_var + m_var):

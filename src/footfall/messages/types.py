@@ -125,6 +125,7 @@ class DepthFrame(Message):
     """
 
     TOPIC = "depth"
+    VERSION = 2  # the intrinsics carry the sensor's noise model
 
     stamp: float
     depth: npt.NDArray

@@ -9,14 +9,10 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from footfall.errors import DatasetError
+from footfall.errors import ConfigError, DatasetError
 from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
 from footfall.reports import write_json
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
-
-# Largest height range within a flat map cell in one frame for recorded data [m]: a real
-# depth sensor's noise spans several millimetres (the simulated camera is noise-free).
-REAL_MAX_CELL_SPREAD = 0.01
 
 
 @dataclass(frozen=True)
@@ -29,14 +25,20 @@ class MapRequest:
         noise: Pose noise model, ``"none"`` or ``"slam"``.
         seed: Seed of the terrain and the noise.
         image_size: Depth image width and height [px].
-        fusion: Per-cell fusion rule.
-        max_cell_spread: In-frame height range of a cell above which it straddles an edge
-            [m]; None for the default (the simulated camera's, or ``REAL_MAX_CELL_SPREAD``
-            for a recording).
-        tum: A TUM-layout sequence to map instead of simulating.
+        fusion: Per-cell fusion rule; None: ``latest`` in simulation, ``variance`` (the
+            sensor's noise averaged down over frames) for a recording.
+        max_cell_spread: In-frame height range of a cell, beyond the sensor's noise, above
+            which it straddles an edge [m]; None for the score's default.
+        tum: A TUM-layout sequence (or, with a camera pose, a depth PNG or a folder of
+            them) to map instead of simulating.
         intrinsics: ``fx, fy, cx, cy`` of the recording's depth camera [px].
         up: The recorded world's up axis.
         depth_scale: Metres per depth unit of the recording.
+        sensor: The recording's sensor class, for its noise model
+            (:mod:`footfall.sensing.noise`).
+        camera_height: Camera height above the floor [m], for frames without a trajectory.
+        camera_pitch_deg: How far the camera looks down [deg], likewise.
+        camera_roll_deg: How far its right side dips [deg], likewise.
     """
 
     terrain: str = "course"
@@ -44,12 +46,23 @@ class MapRequest:
     noise: str = "none"
     seed: int = 0
     image_size: tuple[int, int] = (640, 480)
-    fusion: str = "latest"
+    fusion: str | None = None
     max_cell_spread: float | None = None
     tum: Path | None = None
     intrinsics: tuple[float, float, float, float] = (525.0, 525.0, 319.5, 239.5)
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
     depth_scale: float = 1.0 / 5000.0
+    sensor: str = "kinect"
+    camera_height: float | None = None
+    camera_pitch_deg: float | None = None
+    camera_roll_deg: float | None = None
+
+    @property
+    def fixed_camera(self) -> bool:
+        """Whether the recording's frames are taken from a given camera pose."""
+        return any(
+            v is not None for v in (self.camera_height, self.camera_pitch_deg, self.camera_roll_deg)
+        )
 
 
 @dataclass(frozen=True)
@@ -77,12 +90,13 @@ class MapReport:
         return dict(self.metrics)
 
     def write(self, out: Path) -> list[Path]:
-        """Write ``heightmap.png``, ``scoremap.png`` and ``metrics.json`` to ``out``."""
+        """Write ``heightmap.png``, ``scoremap.png``, ``metrics.json`` and ``map.npz``."""
         from footfall.plots import plot_height_map, plot_score_map
 
         out.mkdir(parents=True, exist_ok=True)
         s = self.snapshot
         paths = [out / "heightmap.png", out / "scoremap.png", out / "metrics.json"]
+        paths.append(write_map_npz(out / "map.npz", s, self.scores))
         plot_height_map(
             s.heights, s.origin, s.resolution, paths[0], self.path_xy, path_label=self.path_label
         )
@@ -100,12 +114,40 @@ class MapReport:
         return paths
 
 
+def write_map_npz(path: Path, snapshot: MapSnapshot, scores: ScoreMap) -> Path:
+    """Write the map as arrays to an ``.npz`` file.
+
+    Arrays ``height`` [m], ``variance`` [m^2], ``spread`` [m], ``score``, ``valid``,
+    ``known``, each N x N with row = y and column = x in the map frame (NaN where
+    unknown), and ``resolution_m``, ``origin_xy_m`` (the map-frame position of the outer
+    corner of cell [0, 0]).
+    """
+
+    def grid(values: npt.NDArray | None, fill: float = np.nan) -> npt.NDArray:
+        if values is None:
+            return np.full(snapshot.heights.T.shape, fill)
+        return np.ascontiguousarray(values.T)
+
+    np.savez_compressed(
+        path,
+        height=grid(snapshot.heights),
+        variance=grid(snapshot.variance),
+        spread=grid(snapshot.spread),
+        score=grid(scores.score),
+        valid=grid(scores.valid),
+        known=grid(snapshot.known),
+        resolution_m=np.float64(snapshot.resolution),
+        origin_xy_m=np.asarray(snapshot.origin, dtype=np.float64),
+        layout=np.str_("row = y, column = x; origin_xy_m is the corner of cell [0, 0]"),
+    )
+    return path
+
+
 def score_config_for(request: MapRequest) -> ScoreConfig:
-    """The score settings of a request: a recording's noise needs a wider cell spread."""
-    if request.max_cell_spread is None and request.tum is None:
+    """The score settings of a request."""
+    if request.max_cell_spread is None:
         return ScoreConfig()
-    spread = REAL_MAX_CELL_SPREAD if request.max_cell_spread is None else request.max_cell_spread
-    return ScoreConfig(max_cell_spread=spread)
+    return ScoreConfig(max_cell_spread=request.max_cell_spread)
 
 
 def run_map(request: MapRequest, on_tick: Callable[[float], None] | None = None) -> MapReport:
@@ -118,28 +160,12 @@ def run_map(request: MapRequest, on_tick: Callable[[float], None] | None = None)
     Raises:
         DatasetError: A recording without depth images, or malformed.
     """
-    map_config = HeightMapConfig(fusion=request.fusion)
+    recorded = request.tum is not None
+    fusion = request.fusion or ("variance" if recorded else "latest")
+    map_config = HeightMapConfig(fusion=fusion)
     score_config = score_config_for(request)
-    if request.tum is not None:
-        from footfall.datasets.tum import load_depth_png, map_tum_sequence
-        from footfall.sensing.camera import PinholeCamera
-
-        first = next(iter(sorted((request.tum / "depth").glob("*.png"))), None)
-        if first is None:
-            raise DatasetError(f"no depth/*.png in {request.tum}")
-        height, width = load_depth_png(first).shape
-        camera = PinholeCamera(*request.intrinsics, width, height)
-        sequence = map_tum_sequence(
-            request.tum, camera, request.up, map_config, score_config, request.depth_scale
-        )
-        return MapReport(
-            sequence.snapshot,
-            sequence.scores,
-            sequence.camera_path_xy,
-            "camera path",
-            sequence.metrics,
-            score_config,
-        )
+    if recorded:
+        return _map_recording(request, map_config, score_config)
     from footfall.robot.spec import load_spec
     from footfall.sim.model import CameraMount
     from footfall.sim.survey import MappingSettings, simulate_mapping
@@ -157,4 +183,58 @@ def run_map(request: MapRequest, on_tick: Callable[[float], None] | None = None)
     survey = simulate_mapping(load_spec("default"), settings, on_tick=on_tick)
     return MapReport(
         survey.snapshot, survey.scores, survey.path_xy, "robot path", survey.metrics, score_config
+    )
+
+
+def _map_recording(
+    request: MapRequest, map_config: HeightMapConfig, score_config: ScoreConfig
+) -> MapReport:
+    """Map a recorded sequence, or frames from a given camera pose."""
+    import math
+
+    from footfall.datasets.tum import load_depth_png, map_tum_sequence, read_fixed_view
+    from footfall.pointcloud.ground import CameraOverFloor
+    from footfall.sensing.camera import PinholeCamera
+    from footfall.sensing.noise import sensor_noise
+    from footfall.sensing.pose import Pose
+
+    assert request.tum is not None
+    pose = None
+    if request.fixed_camera:
+        if request.camera_height is None:
+            raise ConfigError("a fixed camera pose needs --camera-height (and its pitch and roll)")
+        floor = CameraOverFloor.from_angles(
+            request.camera_height,
+            math.radians(request.camera_pitch_deg or 0.0),
+            math.radians(request.camera_roll_deg or 0.0),
+        )
+        pose = Pose(np.array([0.0, 0.0, floor.height_m]), floor.rotation_camera_to_map)
+        first = read_fixed_view(request.tum, pose)[0].depth_path
+    else:
+        if request.tum.is_file() or not (request.tum / "groundtruth.txt").is_file():
+            raise DatasetError(
+                f"{request.tum} has no trajectory (groundtruth.txt): give the camera's pose "
+                "over the floor with --camera-height and --camera-pitch-deg"
+            )
+        first = next(iter(sorted((request.tum / "depth").glob("*.png"))), None)
+        if first is None:
+            raise DatasetError(f"no depth/*.png in {request.tum}")
+    height, width = load_depth_png(first).shape
+    camera = PinholeCamera(*request.intrinsics, width, height, noise=sensor_noise(request.sensor))
+    sequence = map_tum_sequence(
+        request.tum,
+        camera,
+        request.up,
+        map_config,
+        score_config,
+        request.depth_scale,
+        camera_pose=pose,
+    )
+    return MapReport(
+        sequence.snapshot,
+        sequence.scores,
+        sequence.camera_path_xy,
+        "camera path",
+        sequence.metrics,
+        score_config,
     )

@@ -13,11 +13,27 @@ from numba import njit
 
 @njit(cache=True, fastmath=True)
 def score_grid(
-    h, known, inv_8res, g, slope_weight, proximity_weight, threshold, slope, proximity, score, valid
+    h,
+    known,
+    sigma,
+    noise_sigmas,
+    inv_8res,
+    g,
+    slope_weight,
+    proximity_weight,
+    threshold,
+    slope,
+    proximity,
+    score,
+    valid,
 ):
     """Fill ``slope``, ``proximity``, ``score`` and ``valid`` for heights ``h`` (0 where unknown).
 
     ``g`` is the 1-D Gaussian (peak 1) of odd length n; the proximity window is n x n.
+    ``sigma`` is each cell's height noise [m] (0 for an exact map): the score counts only
+    the slope and proximity beyond ``noise_sigmas`` times what that noise alone gives them
+    (for independent cell noise: ``sqrt(12) sigma / (8 res)`` per Sobel axis, and
+    ``sigma sqrt(sum K^2 - 1 + (sum K - 1)^2) / n^2`` for the proximity).
     No NaN enters the arithmetic (unknown heights arrive as 0), so fast-math is safe.
     """
     rows, cols = h.shape
@@ -25,6 +41,9 @@ def score_grid(
     half = n // 2
     g_sum_sq = g.sum() ** 2
     inv_n2 = 1.0 / (n * n)
+    slope_unit = noise_sigmas * np.sqrt(12.0) * inv_8res
+    k_sq = (g * g).sum() ** 2
+    proximity_unit = noise_sigmas * np.sqrt(k_sq - 1.0 + (g_sum_sq - 1.0) ** 2) * inv_n2
     # Pad by `half` on both sides of j: clamped heights, and "unknown" outside the map.
     width = cols + 2 * half
     hp = np.empty(width)
@@ -76,7 +95,9 @@ def score_grid(
             gy = (diff_j[im, j] + 2.0 * diff_j[i, j] + diff_j[ip, j]) * inv_8res
             s = np.sqrt(gx * gx + gy * gy)
             p = abs(acc[j] - h[i, j] * g_sum_sq) * inv_n2
-            total = slope_weight * s + proximity_weight * p
+            noise = sigma[i, j]
+            total = slope_weight * max(s - slope_unit * noise, 0.0)
+            total += proximity_weight * max(p - proximity_unit * noise, 0.0)
             slope[i, j] = s
             proximity[i, j] = p
             score[i, j] = total

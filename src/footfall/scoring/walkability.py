@@ -45,6 +45,9 @@ class ScoreConfig:
             frame, beyond what its slope explains, straddles an edge or a groove too narrow
             for the grid, and is invalid [m]. A 1 cm groove seen from the camera's height
             and distance shows only about 5 mm of its depth.
+        noise_sigmas: A noisy map's slope and proximity count only beyond this many
+            standard deviations of what its cells' height noise alone gives them (an exact
+            map, the simulator's, has none).
     """
 
     slope_weight: float = 1.0
@@ -53,6 +56,7 @@ class ScoreConfig:
     kernel_sigma: float = 1.0
     threshold: float = 0.5
     max_cell_spread: float = 0.002
+    noise_sigmas: float = 2.5
 
     def __post_init__(self) -> None:
         if self.kernel_size < 3 or self.kernel_size % 2 == 0:
@@ -91,7 +95,10 @@ class ScoreMap:
 
 
 def score_heights(
-    heights: npt.ArrayLike, resolution: float, config: ScoreConfig | None = None
+    heights: npt.ArrayLike,
+    resolution: float,
+    config: ScoreConfig | None = None,
+    sigma: npt.ArrayLike | None = None,
 ) -> tuple[
     npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.bool_]
 ]:
@@ -101,9 +108,11 @@ def score_heights(
         heights: Shape (N, M) [m]; NaN marks unknown cells.
         resolution: Cell side [m].
         config: Score parameters.
+        sigma: Height noise of each cell, shape (N, M) [m]; None or NaN for none.
 
     Returns:
-        ``(slope, proximity, score, valid)``, each shape (N, M).
+        ``(slope, proximity, score, valid)``, each shape (N, M); the score counts the slope
+        and proximity beyond what the noise explains (``ScoreConfig.noise_sigmas``).
     """
     c = config or ScoreConfig()
     h = np.asarray(heights, dtype=np.float64)
@@ -111,9 +120,12 @@ def score_heights(
     h0 = np.where(known, h, 0.0)
     slope, proximity, score = (np.empty_like(h0) for _ in range(3))
     valid = np.empty(h0.shape, dtype=bool)
+    noise = np.zeros_like(h0) if sigma is None else np.nan_to_num(np.asarray(sigma, float))
     kernels.score_grid(
         h0,
         known,
+        noise,
+        c.noise_sigmas,
         1.0 / (8.0 * resolution),
         c.kernel_1d,
         c.slope_weight,
@@ -166,7 +178,8 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
     neighbours): a foot nearby keeps its distance from the top of the edge.
     """
     c = config or ScoreConfig()
-    slope, proximity, score, valid = score_heights(snapshot.heights, snapshot.resolution, c)
+    sigma = None if snapshot.variance is None else np.sqrt(snapshot.variance)
+    slope, proximity, score, valid = score_heights(snapshot.heights, snapshot.resolution, c, sigma)
     if snapshot.spread is None:
         return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)
     edge = edge_cells(snapshot.spread, slope, snapshot.resolution, c)
@@ -174,6 +187,6 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
         heights = snapshot.heights.copy()
         top = _around(np.nan_to_num(heights, nan=-np.inf), np.maximum)
         heights[edge] = top[edge]
-        slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c)
+        slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c, sigma)
         valid &= ~_around(edge, np.logical_or)
     return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)

@@ -17,6 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import ConfigError, DepthImageError
+from footfall.sensing.noise import IDEAL, DepthNoiseModel
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,8 @@ class PinholeCamera:
         height: Image height [px].
         min_range: Depth below this is dropped [m].
         max_range: Depth beyond this is dropped [m].
+        noise: How far its readings scatter with range (:mod:`footfall.sensing.noise`);
+            ideal by default.
     """
 
     fx: float
@@ -66,6 +69,7 @@ class PinholeCamera:
     height: int
     min_range: float = 0.0
     max_range: float = 10.0
+    noise: DepthNoiseModel = IDEAL
 
     def __post_init__(self) -> None:
         if not (self.fx > 0 and self.fy > 0):
@@ -131,6 +135,7 @@ class PinholeCamera:
             height,
             self.min_range,
             self.max_range,
+            self.noise,
         )
 
     def depth_in_metres(
