@@ -342,3 +342,59 @@ def test_voxel_grid_keeps_one_centroid_per_voxel(cloud, voxel):
         sums.setdefault(k, []).append(p)
     centroids = np.array(sorted(tuple(np.mean(v, axis=0)) for v in sums.values()))
     np.testing.assert_allclose(np.array(sorted(map(tuple, out))), centroids, atol=1e-9)
+
+
+def test_a_level_camera_under_a_ceiling_takes_the_floor():
+    """A corridor seen by a level camera 1 m up: the ceiling (more points than the floor)
+    and the walls are not the ground; the floor is, and the person standing on it is found."""
+    rng = np.random.default_rng(15)
+    floor = _floor(rng, (0.5, -1), (6, 1), 3000)
+    ceiling = _floor(rng, (0.5, -1), (6, 1), 6000) + [0, 0, 2.5]
+    walls = np.vstack(
+        [
+            np.column_stack(
+                [rng.uniform(0.5, 6, 4000), np.full(4000, side), rng.uniform(0, 2.5, 4000)]
+            )
+            for side in (-1.0, 1.0)
+        ]
+    )
+    person = rng.uniform([2.9, -0.2, 0.0], [3.1, 0.2, 1.7], (1500, 3))
+    scene = np.vstack([floor, ceiling, walls, person])
+    level = CameraOverFloor.from_angles(1.0)
+    in_camera = level.rotation_camera_to_map.inv().apply(scene - [0, 0, 1.0])
+    detection = detect_obstacles(in_camera, "camera")
+    assert detection.camera.height_m == pytest.approx(1.0, abs=0.02)
+    assert detection.ground.angle_to_up_deg < 2
+    people = [
+        c for c in detection.clusters if abs(c.centre[0] - 3.0) < 0.2 and abs(c.centre[1]) < 0.2
+    ]
+    assert len(people) == 1 and people[0].height > 1.5
+
+
+def test_obstacles_cli_takes_the_pose_options(tmp_path):
+    """`footfall obstacles` with --camera-height/--camera-pitch-deg and each ground method."""
+    rng = np.random.default_rng(16)
+    truth = CameraOverFloor.from_angles(0.7, np.radians(40))
+    scene = np.vstack(
+        [
+            _floor(rng, (0.3, -1), (2.5, 1), 8000),
+            rng.uniform([1.2, -0.2, 0], [1.5, 0.2, 0.5], (1500, 3)),
+        ]
+    )
+    path = tmp_path / "capture.npy"
+    np.save(path, truth.rotation_camera_to_map.inv().apply(scene - [0, 0, 0.7]))
+    base = ["obstacles", "--cloud", str(path), "--camera-height", "0.7", "--camera-pitch-deg", "40"]
+    for ground in ("ransac", "plane", "cones"):
+        out = tmp_path / ground
+        assert main([*base, "--ground", ground, "--out", str(out)]) == 0
+        data = json.loads((out / "obstacles.json").read_text())
+        assert data["ground_plane"]["angle_to_up_deg"] < 2, ground
+        boxes = [c for c in data["clusters"] if abs(c["box"]["x"] - 1.35) < 0.15]
+        assert boxes, ground
+    a, b, c = truth.up_in_camera
+    plane = ["--ground-plane", str(a), str(b), str(c), "0.7", "--ground", "plane"]
+    out = tmp_path / "coefficients"
+    assert main(["obstacles", "--cloud", str(path), *plane, "--out", str(out)]) == 0
+    data = json.loads((out / "obstacles.json").read_text())
+    assert data["camera"]["pitch_deg"] == pytest.approx(40, abs=1e-6)
+    assert [c for c in data["clusters"] if abs(c["box"]["x"] - 1.35) < 0.15]

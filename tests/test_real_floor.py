@@ -121,3 +121,29 @@ def test_a_single_frame_without_a_pose_is_a_clear_error(tmp_path):
 
     with pytest.raises(DatasetError, match="--camera-height"):
         run_map(MapRequest(tum=depth))
+
+
+def test_a_bad_frame_in_a_recording_is_skipped_and_counted(tmp_path):
+    """A later frame that is not plausible depth (the lens covered) is skipped and counted;
+    the frames around it still map. A first frame in the wrong units is an error."""
+    from PIL import Image
+
+    from footfall.datasets.tum import map_tum_sequence
+    from footfall.errors import DatasetError
+
+    (tmp_path / "depth").mkdir()
+    rng = np.random.default_rng(1)
+    good = (7500 + rng.integers(-5, 5, (48, 64))).astype(np.uint16)
+    frames = [good, np.zeros((48, 64), np.uint16), good]
+    lines, poses = [], []
+    for k, image in enumerate(frames):
+        Image.fromarray(image).save(tmp_path / "depth" / f"{k}.png")
+        lines.append(f"{k / 30:.4f} depth/{k}.png")
+        poses.append(f"{k / 30:.4f} 0 0 1 0 0 0 1")
+    (tmp_path / "depth.txt").write_text("\n".join(lines) + "\n")
+    (tmp_path / "groundtruth.txt").write_text("\n".join(poses) + "\n")
+    camera = PinholeCamera(60, 60, 31.5, 23.5, 64, 48, noise=KINECT)
+    sequence = map_tum_sequence(tmp_path, camera, (0, 0, 1))
+    assert sequence.metrics["frames"] == 2 and sequence.metrics["frames_implausible"] == 1
+    with pytest.raises(DatasetError, match="depth-scale"):
+        map_tum_sequence(tmp_path, camera, (0, 0, 1), depth_scale=1e-5)

@@ -241,13 +241,8 @@ def _to_map(
     prior = camera or CameraOverFloor.from_angles()
     prior_up = prior.up_in_camera
     up_known = camera is not None or ground_plane is not None
-    if ground_plane is not None:
-        given = CameraOverFloor.from_plane(ground_plane)
-        prior = (
-            given
-            if camera is None
-            else CameraOverFloor(given.rotation_camera_to_map, given.height_m)
-        )
+    if ground_plane is not None:  # the plane fixes the pose; the angles say how far off it is
+        prior = CameraOverFloor.from_plane(ground_plane)
     if c.ground == "ransac":
         found = find_ground(
             p,
@@ -257,6 +252,7 @@ def _to_map(
             c.ransac_iterations,
             c.min_ground_fraction,
             rng=rng,
+            below_origin=True,
         )
         floor = CameraOverFloor.from_up(found.normal, found.offset_m)
         in_camera = GroundPlane(

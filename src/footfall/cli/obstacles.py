@@ -16,9 +16,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "obstacles",
         help="detect obstacles in a point cloud",
         description=(
-            "Detect obstacles in a point cloud (dissertation §6.3.1): pass-through filter, ground "
-            "removal, Euclidean clustering, principal-axes boxes and circles. Writes "
-            "obstacles.json and obstacles.png (top view) to --out."
+            "Detect obstacles in a point cloud (dissertation §6.3.1): pass-through filter, voxel "
+            "grid, ground removal, Euclidean clustering, principal-axes boxes and circles "
+            "(split where they would cover free floor). Writes obstacles.json and "
+            "obstacles.png (top view) to --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -35,6 +36,20 @@ def run(args: argparse.Namespace, console: Console) -> int:
     report = run_obstacles(cloud_request(args))
     paths = report.write(args.out)
     summary = report.to_json()
-    console.print(f"{len(summary['clusters'])} obstacles from {summary['points']} points")
+    ground = summary["ground_plane"]
+    console.print(
+        f"ground: {ground['inlier_fraction']:.0%} of the points, "
+        f"{ground['angle_to_up_deg']:.1f} deg from the expected up axis"
+        + (
+            f"; camera {summary['camera']['height_m']:.2f} m above it, looking "
+            f"{summary['camera']['pitch_deg']:.1f} deg down"
+            if "camera" in summary
+            else ""
+        )
+    )
+    console.print(
+        f"{len(summary['clusters'])} obstacles from {summary['points_in']} points "
+        f"({summary['points_after_voxel']} after the voxel grid) in {summary['detect_ms']:.0f} ms"
+    )
     wrote(console, paths)
     return 0

@@ -342,6 +342,7 @@ class TumSequenceSource:
         self.bus = bus
         self.camera = camera
         self.depth_scale = depth_scale
+        self.frames_implausible = 0
         if camera_pose is not None:
             self.frames, self.skipped = read_fixed_view(folder, camera_pose), 0
             self.poses = [camera_pose for _ in self.frames]
@@ -360,18 +361,31 @@ class TumSequenceSource:
         self.centres = self.poses
 
     def play(self) -> int:
-        """Publish every frame, as fast as they load; returns how many."""
+        """Publish every frame, as fast as they load; returns how many.
+
+        The first frame must be plausible depth under the scale (else the whole recording
+        is in another convention, and that is an error); a later frame that is not (the
+        lens covered, a corrupt file) is skipped and counted in ``frames_implausible``.
+        """
         camera_in_body = Pose(np.zeros(3), Rotation.identity())
         frames = zip(self.frames, self.poses, self.centres, strict=True)
+        published = 0
         for number, (frame, pose, centre) in enumerate(frames, 1):
-            depth = load_depth_png(frame.depth_path)
-            check_depth_units(depth, self.depth_scale, frame.depth_path)
+            try:
+                depth = load_depth_png(frame.depth_path)
+                check_depth_units(depth, self.depth_scale, frame.depth_path)
+            except DatasetError:
+                if number == 1:
+                    raise
+                self.frames_implausible += 1
+                continue
+            published += 1
             self.bus.publish(PoseEstimate.TOPIC, PoseEstimate(frame.timestamp, pose, centre))
             image = DepthFrame(
                 frame.timestamp, depth, self.camera, camera_in_body, self.depth_scale, number
             )
             self.bus.publish(DepthFrame.TOPIC, image)
-        return len(self.frames)
+        return published
 
 
 def map_tum_sequence(
@@ -420,6 +434,7 @@ def map_tum_sequence(
     metrics: dict[str, object] = {
         "frames": mapping.frames,
         "frames_skipped_no_pose": source.skipped + mapping.frames_skipped_no_pose,
+        "frames_implausible": source.frames_implausible,
         **mapping.timing(),
         "cells_known": int(snapshot.known.sum()),
         "pixels_dropped": mapping.pixels_dropped,

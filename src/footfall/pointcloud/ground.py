@@ -162,6 +162,7 @@ def _best_plane(
     threshold: float,
     iterations: int,
     rng: np.random.Generator,
+    below_origin: bool,
 ) -> tuple[npt.NDArray[np.float64], float] | None:
     """The best-supported plane within the tilt tolerance, refined by least squares."""
     score_on = points if len(points) <= 20000 else points[rng.choice(len(points), 20000, False)]
@@ -180,6 +181,8 @@ def _best_plane(
         if normal @ up < cos_tilt:
             continue
         d = -float(normal @ a)
+        if below_origin and d <= 0:  # a ceiling, not a floor: the sensor is under it
+            continue
         count = int(np.count_nonzero(np.abs(score_on @ normal + d) < threshold))
         if count > best_count:
             best, best_count = (normal, d), count
@@ -194,7 +197,7 @@ def _best_plane(
         centre = points[inliers].mean(axis=0)
         refined = np.linalg.svd(points[inliers] - centre, full_matrices=False)[2][-1]
         refined = refined if refined @ up >= 0 else -refined
-        if refined @ up >= cos_tilt:
+        if refined @ up >= cos_tilt and not (below_origin and refined @ centre >= 0):
             normal, d = refined, -float(refined @ centre)
     return normal, d
 
@@ -208,6 +211,7 @@ def find_ground(
     min_fraction: float = 0.1,
     max_planes: int = 4,
     rng: np.random.Generator | None = None,
+    below_origin: bool = False,
 ) -> GroundPlane:
     """The floor: the lowest well-supported plane whose normal is near ``up``.
 
@@ -225,6 +229,8 @@ def find_ground(
         min_fraction: Smallest share of the points a candidate must hold.
         max_planes: Most planes extracted.
         rng: Random generator (seeded: repeatable).
+        below_origin: Only planes with the frame's origin above them (the camera frame's
+            origin is the camera: its floor lies below it, a ceiling above).
 
     Raises:
         DatasetError: Fewer than 3 points, or no plane within the tolerance of ``up``.
@@ -244,7 +250,7 @@ def find_ground(
     for _ in range(max_planes):
         if len(remaining) < 3:
             break
-        plane = _best_plane(remaining, u, cos_tilt, threshold_m, iterations, rng)
+        plane = _best_plane(remaining, u, cos_tilt, threshold_m, iterations, rng, below_origin)
         if plane is None:
             break
         normal, d = plane
