@@ -44,7 +44,9 @@ else:
     if limit and limit < len(points):
         points = points[np.random.default_rng(0).choice(len(points), limit, replace=False)]
 from footfall.biped.obstacles import DetectionConfig, detect_obstacles
-from footfall.pointcloud.filters import euclidean_clusters
+from footfall.pointcloud.filters import euclidean_clusters, voxel_downsample
+if method != "detect" and voxel > 0:
+    points = voxel_downsample(points, voxel)
 if method == "detect":
     detect_obstacles(points[:1000], frame, DetectionConfig(voxel_size=voxel))  # compile
 else:
@@ -98,11 +100,13 @@ def main() -> dict:
             continue
         for limit in (20000, 60000):  # sizes where the pair graph still fits
             for method in ("kdtree_pairs", "grid"):
-                results[f"{name}/{limit}/{method}"] = run_case(str(path), method, limit)
-        results[f"{name}/all/grid"] = run_case(str(path), "grid")
+                results[f"{name}/{limit}/{method}"] = run_case(str(path), method, limit, 0.0)
+        for method in ("kdtree_pairs", "grid"):  # the whole cloud after the voxel grid
+            results[f"{name}/voxel_0.02/{method}"] = run_case(str(path), method, 0, 0.02)
+        results[f"{name}/all/grid"] = run_case(str(path), "grid", 0, 0.0)
         results[f"{name}/all/detect"] = run_case(str(path), "detect")
-    for method in ("grid", "detect"):
-        results[f"synthetic/2000000/{method}"] = run_case("synthetic", method, 2_000_000)
+    results["synthetic/2000000/grid"] = run_case("synthetic", "grid", 2_000_000, 0.0)
+    results["synthetic/2000000/detect"] = run_case("synthetic", "detect", 2_000_000)
     results["synthetic/2000000/detect_no_voxel"] = run_case("synthetic", "detect", 2_000_000, 0.0)
     print(f"{'case':<36} {'points':>9} {'seconds':>9} {'peak MB':>9} {'extra MB':>9}  clusters")
     for key, r in results.items():

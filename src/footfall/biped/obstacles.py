@@ -78,7 +78,7 @@ class DetectionConfig:
     ransac_threshold: float = 0.02
     ransac_iterations: int = 200
     ground_max_tilt_deg: float | None = None
-    min_ground_fraction: float = 0.1
+    min_ground_fraction: float = 0.05
     cluster_tolerance: float = 0.30
     min_cluster_size: int = 5
     cone_min_height: float = 0.05
