@@ -212,13 +212,14 @@ def find_ground(
     max_planes: int = 4,
     rng: np.random.Generator | None = None,
     below_origin: bool = False,
+    parallel_deg: float = 10.0,
 ) -> GroundPlane:
     """The floor: the lowest well-supported plane whose normal is near ``up``.
 
     Planes are extracted one after another (RANSAC, each refined by least squares on its
     inliers, whose points then leave), as long as each holds at least ``min_fraction`` of
-    the points. Of these, the one whose inliers lie lowest (median height along ``up``)
-    is the floor.
+    the points. Of those parallel to the first, best-supported one, the one whose inliers
+    lie lowest (median height along its normal) is the floor.
 
     Args:
         points: Shape (n, 3) [m].
@@ -231,6 +232,8 @@ def find_ground(
         rng: Random generator (seeded: repeatable).
         below_origin: Only planes with the frame's origin above them (the camera frame's
             origin is the camera: its floor lies below it, a ceiling above).
+        parallel_deg: Candidates more than this far from parallel to the best-supported
+            one do not compete [deg].
 
     Raises:
         DatasetError: Fewer than 3 points, or no plane within the tolerance of ``up``.
@@ -246,7 +249,7 @@ def find_ground(
     rng = rng or np.random.default_rng(0)
     cos_tilt = math.cos(max_tilt_rad)
     remaining = p
-    candidates: list[tuple[float, npt.NDArray[np.float64], float]] = []
+    candidates: list[tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], float]] = []
     for _ in range(max_planes):
         if len(remaining) < 3:
             break
@@ -257,7 +260,7 @@ def find_ground(
         inliers = np.abs(remaining @ normal + d) < threshold_m
         if inliers.sum() < min_fraction * len(p):
             break
-        candidates.append((float(np.median(remaining[inliers] @ u)), normal, d))
+        candidates.append((remaining[inliers], normal, d))
         remaining = remaining[~inliers]
     if not candidates:
         raise DatasetError(
@@ -265,6 +268,12 @@ def find_ground(
             f"holds {min_fraction:.0%} of the points: give the camera's pitch and roll "
             "(--camera-pitch-deg, --camera-roll-deg) or the plane (--ground-plane A B C D)"
         )
-    _, normal, d = min(candidates, key=lambda c: c[0])
+    # Heights along the best-supported plane's normal: the prior's up may be far off (a
+    # camera pitched down with no pose given), and along it a higher plane can look lower.
+    # Only surfaces level with it compete (the floor under a table top is parallel to it;
+    # a slanted patch of background is not).
+    reference = candidates[0][1]
+    level = [c for c in candidates if c[1] @ reference >= math.cos(math.radians(parallel_deg))]
+    _, normal, d = min(level, key=lambda c: float(np.median(c[0] @ reference)))
     fraction = float(np.count_nonzero(np.abs(p @ normal + d) < threshold_m)) / len(p)
-    return GroundPlane(normal, d, fraction, _angle_deg(normal, u), len(candidates))
+    return GroundPlane(normal, d, fraction, _angle_deg(normal, u), len(level))
