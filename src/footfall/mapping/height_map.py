@@ -317,6 +317,7 @@ class HeightMap:
             self._frame_r2,
             self._frame_sum,
             self._frame_n,
+            not camera.noise.is_ideal,
             self._stamp,
             self._next_frame(),
             self._touched,

@@ -98,6 +98,7 @@ def bin_depth(
     frame_r2,
     frame_sum,
     frame_n,
+    keep_mean,
     stamp,
     frame_id,
     touched,
@@ -105,7 +106,8 @@ def bin_depth(
 ):
     """Back-project a depth image, move it into the world and keep each cell's highest point.
 
-    ``origin`` holds the window's global origin cell (i, j) and the same modulo n.
+    ``origin`` holds the window's global origin cell (i, j) and the same modulo n. With
+    ``keep_mean`` the cells also sum their points (a noisy camera's cells take the mean).
     Returns the number of touched cells (their flat buffer indices are in ``touched``).
     """
     n = frame_h.shape[0]
@@ -153,8 +155,9 @@ def bin_depth(
                 frame_h[bi, bj] = wz
                 frame_lo[bi, bj] = wz
                 frame_r2[bi, bj] = r2
-                frame_sum[bi, bj] = wz
-                frame_n[bi, bj] = 1
+                if keep_mean:
+                    frame_sum[bi, bj] = wz
+                    frame_n[bi, bj] = 1
                 touched[n_touched] = bi * n + bj
                 n_touched += 1
             else:
@@ -164,8 +167,9 @@ def bin_depth(
                     frame_lo[bi, bj] = wz
                 if r2 < frame_r2[bi, bj]:
                     frame_r2[bi, bj] = r2
-                frame_sum[bi, bj] += wz
-                frame_n[bi, bj] += 1
+                if keep_mean:  # only a noisy camera's cells take their mean
+                    frame_sum[bi, bj] += wz
+                    frame_n[bi, bj] += 1
             valid += 1
     counts[VALID] += valid
     counts[OUTSIDE] += outside
