@@ -113,3 +113,24 @@ def cloud_request(args: argparse.Namespace):
         cluster_tolerance=args.cluster_tolerance,
         min_cluster_size=args.min_cluster_size,
     )
+
+
+def add_recording_options(p: argparse.ArgumentParser) -> None:
+    """Options that record a run: MCAP for ROS tools and replay, rerun for a person."""
+    p.add_argument(
+        "--record",
+        type=Path,
+        default=None,
+        metavar="FILE.mcap",
+        help="record every bus message to an MCAP file (ROS 2 types, CDR; footfall replay)",
+    )
+    p.add_argument(
+        "--rerun",
+        type=Path,
+        default=None,
+        metavar="FILE.rrd",
+        help="log the run for the rerun viewer (needs footfall[viz])",
+    )
+    p.add_argument(
+        "--rerun-spawn", action="store_true", help="open a rerun viewer on the run as it goes"
+    )

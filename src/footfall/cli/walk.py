@@ -7,7 +7,13 @@ from pathlib import Path
 
 from rich.console import Console
 
-from footfall.cli.common import format_value, print_table, sim_progress, wrote
+from footfall.cli.common import (
+    add_recording_options,
+    format_value,
+    print_table,
+    sim_progress,
+    wrote,
+)
 from footfall.motion.gait import GaitKind
 from footfall.robot.spec import BUILTIN_ROBOTS
 
@@ -112,6 +118,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         action="store_true",
         help="pace the control loop to the wall clock, as on a real robot (overruns counted)",
     )
+    add_recording_options(p)
     p.add_argument("--out", type=Path, default=Path("footfall-out/walk"), help="output folder")
     p.set_defaults(handler=run)
 
@@ -137,6 +144,9 @@ def run(args: argparse.Namespace, console: Console) -> int:
             rise=args.rise,
             groove=args.groove,
             realtime=args.realtime,
+            record=args.record,
+            rerun=args.rerun,
+            rerun_spawn=args.rerun_spawn,
         )
     )
     mode = "blind (thesis baseline)" if args.blind else "with camera, map and foothold planning"

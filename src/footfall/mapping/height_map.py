@@ -301,6 +301,7 @@ class HeightMap:
         n_touched = kernels.bin_depth(
             d,
             camera.scale_for(d, depth_scale),
+            camera.units_per_metre_for(d, depth_scale),
             stride,
             camera.fx,
             camera.fy,

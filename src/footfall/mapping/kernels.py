@@ -82,6 +82,7 @@ def _bin_point(
 def bin_depth(
     depth,
     scale,
+    units,
     stride,
     fx,
     fy,
@@ -120,7 +121,8 @@ def bin_depth(
     for v in range(0, rows, stride):
         yv = (v - cy) / fy
         for k in range(column_factor.shape[0]):
-            z = depth[v, k * stride] * scale
+            # Whole units per metre divide (see PinholeCamera.units_per_metre_for).
+            z = depth[v, k * stride] / units if units > 0.0 else depth[v, k * stride] * scale
             if not (z > 0.0 and z >= min_range and z <= max_range):
                 # Rare path: say why the pixel is dropped.
                 if math.isnan(z) or math.isinf(z):

@@ -30,7 +30,8 @@ from typing import Any, ClassVar, TypeVar
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from footfall.errors import FootfallError, MessageError
+from footfall.errors import FootfallError, InvalidPoseError, MessageError
+from footfall.sensing.pose import exact_rotation
 
 MAGIC = b"FFM"
 FORMAT = 1
@@ -225,22 +226,11 @@ class _Reader:
 
 
 def _rotation(q: np.ndarray, name: str) -> Rotation:
-    """The rotation of a quaternion, bit for bit when it is already of unit norm.
-
-    ``Rotation.from_quat`` normalises, which moves a unit quaternion by an ulp; the state
-    SciPy pickles a rotation with restores it exactly.
-    """
-    norm = float(np.linalg.norm(q))
-    if not (np.all(np.isfinite(q)) and norm > 0):
-        raise MessageError(f"field {name}: quaternion {q.tolist()} is not a rotation")
-    if abs(norm - 1.0) < 1e-12:
-        rotation = Rotation.__new__(Rotation)
-        try:
-            rotation.__setstate__((q[None, :], True))
-            return rotation
-        except (TypeError, ValueError, AttributeError):
-            pass
-    return Rotation.from_quat(q)
+    """The rotation of a quaternion, bit for bit when it is already of unit norm."""
+    try:
+        return exact_rotation(q)
+    except InvalidPoseError as exc:
+        raise MessageError(f"field {name}: {exc}") from exc
 
 
 def _read(r: _Reader, kind: Any, name: str) -> Any:

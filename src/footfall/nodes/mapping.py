@@ -93,6 +93,7 @@ class MappingNode:
         self.bus = bus
         self.score_config = score_config or ScoreConfig()
         self.height_map = HeightMap(map_config, centre=centre)
+        self.initial_centre = (float(centre[0]), float(centre[1]))
         self.publish_every_frame = publish_every_frame
         self.stride = stride
         self.scores: ScoreMap | None = None

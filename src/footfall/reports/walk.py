@@ -42,6 +42,9 @@ class WalkRequest:
         rise: Stairs' step height [m], or None.
         groove: Cobblestones' groove width [m], or None.
         realtime: Pace the walk to the wall clock.
+        record: An ``.mcap`` file to record every bus message to.
+        rerun: An ``.rrd`` file to log the walk to for the rerun viewer.
+        rerun_spawn: Open a rerun viewer on the walk.
     """
 
     terrain: str = "stairs"
@@ -59,6 +62,9 @@ class WalkRequest:
     rise: float | None = None
     groove: float | None = None
     realtime: bool = False
+    record: Path | None = None
+    rerun: Path | None = None
+    rerun_spawn: bool = False
 
 
 @dataclass(frozen=True)
@@ -198,5 +204,19 @@ def run_walk(job: WalkJob, on_tick: Callable[[float], None] | None = None) -> Wa
         job: The walk (see :func:`prepare_walk`).
         on_tick: Progress callback with the walk time [s].
     """
-    result = simulate_walk(job.spec, job.settings, on_tick=on_tick, terrain=job.terrain)
+    from footfall.recording.session import Recorders
+    from footfall.runtime.bus import InProcessBus
+
+    r = job.request
+    with Recorders(r.record, r.rerun, r.rerun_spawn) as recorders:
+        result = simulate_walk(
+            job.spec,
+            job.settings,
+            on_tick=on_tick,
+            terrain=job.terrain,
+            bus=recorders.attach(InProcessBus()),
+            on_build=lambda robot: (
+                recorders.mapping_started(robot.mapping) if robot.mapping is not None else None
+            ),
+        )
     return WalkReport(job, result)

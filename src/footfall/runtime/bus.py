@@ -77,6 +77,7 @@ class InProcessBus:
         self._subscribers: dict[str, list[Callback]] = defaultdict(list)
         self._services: dict[str, Handler] = {}
         self._last: dict[str, Message] = {}
+        self._taps: list[Callable[[str, Message], None]] = []
         self.stats: dict[str, TopicStats] = defaultdict(TopicStats)
 
     def _carry(self, topic: str, message: Message) -> Message:
@@ -91,8 +92,14 @@ class InProcessBus:
         message = self._carry(topic, message)
         self.stats[topic].messages += 1
         self._last[topic] = message
+        for tap in self._taps:
+            tap(topic, message)
         for callback in tuple(self._subscribers.get(topic, ())):
             callback(message)
+
+    def tap(self, callback: Callable[[str, Message], None]) -> None:
+        """See every message published on any topic, before its subscribers (a recorder)."""
+        self._taps.append(callback)
 
     def subscribe(self, topic: str, callback: Callback, last: bool = False) -> None:
         """Subscribe to ``topic``; with ``last``, get the latest message on it right away."""

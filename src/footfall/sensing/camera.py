@@ -178,12 +178,34 @@ class PinholeCamera:
         """Metres per depth unit for an image checked by :meth:`depth_in_metres`."""
         return 1.0 if depth.dtype.kind == "f" else float(depth_scale)  # type: ignore[arg-type]
 
+    @staticmethod
+    def units_per_metre_for(depth: npt.NDArray, depth_scale: float | None) -> float:
+        """Whole depth units per metre (1000 for mm, 5000 for TUM), or 0 when not whole.
+
+        Integer depth is divided by this rather than multiplied by its inverse: the real
+        quotient of 5 v / 5000 and v / 1000 is the same, so a depth in TUM units and the
+        same depth in millimetres give bit-identical metres.
+        """
+        if depth.dtype.kind == "f" or not depth_scale:
+            return 0.0
+        units = 1.0 / float(depth_scale)
+        whole = round(units)
+        return float(whole) if whole >= 1 and abs(units - whole) <= 1e-9 * units else 0.0
+
+    @classmethod
+    def to_metres(cls, depth: npt.NDArray, depth_scale: float | None) -> npt.NDArray[np.float64]:
+        """Depth in metres, float64, from an image checked by :meth:`depth_in_metres`."""
+        units = cls.units_per_metre_for(depth, depth_scale)
+        if units:
+            return depth.astype(np.float64) / units
+        return depth.astype(np.float64) * cls.scale_for(depth, depth_scale)
+
     def organized_points(
         self, depth: npt.ArrayLike, depth_scale: float | None = None
     ) -> npt.NDArray[np.float64]:
         """Back-project every pixel: shape (height, width, 3) [m], NaN where depth is invalid."""
         d = self.depth_in_metres(depth, depth_scale)
-        z = d.astype(np.float64) * self.scale_for(d, depth_scale)
+        z = self.to_metres(d, depth_scale)
         valid = np.isfinite(z) & (z > 0) & (z >= self.min_range) & (z <= self.max_range)
         z = np.where(valid, z, np.nan)
         u = np.arange(self.width, dtype=np.float64)
@@ -209,7 +231,7 @@ class PinholeCamera:
         if stride < 1:
             raise DepthImageError(f"stride must be >= 1, got {stride}")
         d = self.depth_in_metres(depth, depth_scale)[::stride, ::stride]
-        z = d.astype(np.float64) * self.scale_for(d, depth_scale)
+        z = self.to_metres(d, depth_scale)
         finite = np.isfinite(z)
         zero = finite & (z == 0)
         negative = finite & (z < 0)

@@ -56,6 +56,11 @@ class Pose:
         return cls(np.asarray(position, dtype=np.float64), Rotation.from_quat(q / norm))
 
     @classmethod
+    def identity(cls) -> Pose:
+        """The identity transform."""
+        return cls(np.zeros(3), Rotation.identity())
+
+    @classmethod
     def from_matrix(cls, matrix: npt.ArrayLike) -> Pose:
         """A pose from a 4x4 homogeneous transform.
 
@@ -158,3 +163,27 @@ class SlamNoise:
         # The drift is a rotation of the estimate about the world axes (a map-frame error).
         error = Rotation.from_euler("xyz", angles)
         return Pose(position, error * true_pose.rotation)
+
+
+def exact_rotation(quaternion_xyzw: npt.ArrayLike) -> Rotation:
+    """The rotation of a quaternion ``(x, y, z, w)``, bit for bit when it is of unit norm.
+
+    ``Rotation.from_quat`` normalises, which moves a unit quaternion by an ulp (a third of
+    the time) and so the rotation matrix; the state SciPy pickles a rotation with restores
+    it exactly. A recorded pose thus replays to the very matrix it was.
+
+    Raises:
+        InvalidPoseError: A quaternion with a non-finite entry or of zero norm.
+    """
+    q = np.asarray(quaternion_xyzw, dtype=np.float64).reshape(4)
+    norm = float(np.linalg.norm(q))
+    if not (np.all(np.isfinite(q)) and norm > 0):
+        raise InvalidPoseError(f"quaternion {q.tolist()} is not a rotation")
+    if abs(norm - 1.0) < 1e-12:
+        rotation = Rotation.__new__(Rotation)
+        try:
+            rotation.__setstate__((q[None, :].copy(), True))
+            return rotation
+        except (TypeError, ValueError, AttributeError):
+            pass
+    return Rotation.from_quat(q)

@@ -281,6 +281,7 @@ def simulate_walk(
     on_tick: Callable[[float], None] | None = None,
     terrain: Terrain | None = None,
     bus: Bus | None = None,
+    on_build: Callable[[SimRobot], None] | None = None,
 ) -> WalkResult:
     """Walk the robot across a terrain in MuJoCo, towards the terrain's goal.
 
@@ -294,6 +295,8 @@ def simulate_walk(
         on_tick: Progress callback, called with the walk time [s] after each control tick.
         terrain: A terrain object to use instead of ``settings.terrain`` (custom terrains).
         bus: The bus to run the nodes on; a new in-process bus by default.
+        on_build: Called with the robot once its nodes stand (a recorder notes the mapping
+            node's settings).
 
     Returns:
         The record, metrics and simulator warnings.
@@ -301,6 +304,8 @@ def simulate_walk(
     terrain = terrain or make_terrain(settings.terrain, seed=settings.seed)
     bus = bus if bus is not None else InProcessBus()
     robot = SimRobot.build(spec, settings, terrain, bus)
+    if on_build is not None:
+        on_build(robot)
     task = TerrainTask(bus, terrain, settings.command, settings.stop_at_goal)
     task.begin()
     scheduler = (

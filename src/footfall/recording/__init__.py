@@ -1,0 +1,1 @@
+"""Recordings: MCAP and ROS bags written and replayed, rerun logs."""

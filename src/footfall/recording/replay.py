@@ -1,0 +1,359 @@
+"""Replay a recording through the same mapping and scoring nodes as a live run.
+
+Depth images (``sensor_msgs/Image``, ``16UC1`` millimetres or ``32FC1`` metres) with their
+``CameraInfo`` and a camera pose (a ``PoseStamped`` or ``Odometry`` topic, or TF between
+two frames) become footfall's depth frames and pose estimates on an in-process bus, where
+a :class:`MappingNode` builds the map. footfall's own recordings also carry the body pose,
+the ground prior, the camera's noise and range limits, and the mapping settings, so they
+replay in publish order to the very map the live run built, bit for bit.
+
+A ROS bag's poses are read first; each depth image then takes the pose nearest in time
+(within ``max_pose_gap_s``; images without one are counted, not mapped).
+"""
+
+from __future__ import annotations
+
+import bisect
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.errors import DatasetError
+from footfall.mapping.height_map import HeightMapConfig
+from footfall.messages import DepthFrame, GroundPrior, PoseEstimate
+from footfall.nodes.mapping import MappingNode
+from footfall.recording.reader import RecordedMessage, Recording
+from footfall.recording.ros_types import BODY_FRAME, CAMERA_FRAME, WORLD_FRAME, seconds
+from footfall.runtime.bus import InProcessBus
+from footfall.scoring.walkability import ScoreConfig
+from footfall.sensing.camera import PinholeCamera
+from footfall.sensing.noise import DepthNoiseModel, sensor_noise
+from footfall.sensing.pose import Pose, exact_rotation
+
+DEPTH_ENCODINGS = {"16UC1": ("<u2", 0.001), "mono16": ("<u2", 0.001), "32FC1": ("<f4", None)}
+POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
+
+
+@dataclass(frozen=True)
+class ReplayRequest:
+    """What to replay (the options of ``footfall replay``).
+
+    Attributes:
+        path: A footfall MCAP file, a ROS 2 bag (folder or ``.mcap``) or a ROS 1 ``.bag``.
+        rate: Playback speed against the recording's clock; ignored with ``fast``.
+        fast: Play as fast as the mapping goes.
+        depth_topic: The depth image topic; None to pick the one there is.
+        info_topic: Its ``CameraInfo`` topic; None for the one beside it.
+        pose_topic: A ``PoseStamped`` or ``Odometry`` topic of the depth camera's optical
+            frame in a z-up world.
+        tf_frames: ``(world, camera)`` frames to look the camera's pose up in TF instead.
+        sensor: The depth sensor's noise model (recordings that do not carry one).
+        fusion: Per-cell fusion rule; None: the recording's, else ``variance``.
+        max_pose_gap_s: Largest time between a depth image and its pose [s].
+    """
+
+    path: Path
+    rate: float = 1.0
+    fast: bool = False
+    depth_topic: str | None = None
+    info_topic: str | None = None
+    pose_topic: str | None = None
+    tf_frames: tuple[str, str] | None = None
+    sensor: str = "kinect"
+    fusion: str | None = None
+    max_pose_gap_s: float = 0.05
+
+
+def pose_of(message: Any) -> Pose:
+    """The pose of a ``geometry_msgs/Pose``, its rotation exactly as recorded."""
+    p, q = message.position, message.orientation
+    return Pose(np.array([p.x, p.y, p.z]), exact_rotation([q.x, q.y, q.z, q.w]))
+
+
+def transform_pose(transform: Any) -> Pose:
+    """The pose of a ``geometry_msgs/Transform`` (child in parent)."""
+    t, q = transform.translation, transform.rotation
+    return Pose(np.array([t.x, t.y, t.z]), exact_rotation([q.x, q.y, q.z, q.w]))
+
+
+def depth_array(image: Any) -> tuple[npt.NDArray, float | None]:
+    """A ``sensor_msgs/Image`` of depth as an array and its metres per unit.
+
+    Raises:
+        DatasetError: An encoding that is not depth, or data of the wrong size.
+    """
+    if image.encoding not in DEPTH_ENCODINGS:
+        known = ", ".join(DEPTH_ENCODINGS)
+        raise DatasetError(f"depth image encoding {image.encoding!r} is not depth ({known})")
+    dtype, scale = DEPTH_ENCODINGS[image.encoding]
+    kind = np.dtype(dtype).newbyteorder(">" if image.is_bigendian else "<")
+    row = image.width * kind.itemsize
+    data = np.asarray(image.data, dtype=np.uint8)
+    if image.step < row or data.size < image.step * image.height:
+        raise DatasetError(
+            f"depth image of {image.width}x{image.height} {image.encoding} holds {data.size} "
+            f"bytes with step {image.step}"
+        )
+    rows = data[: image.step * image.height].reshape(image.height, image.step)[:, :row]
+    return np.ascontiguousarray(rows).view(kind).astype(dtype), scale
+
+
+class TransformTree:
+    """The latest transform of each frame to its parent, from ``/tf`` and ``/tf_static``."""
+
+    def __init__(self) -> None:
+        self.parent: dict[str, tuple[str, Pose]] = {}
+
+    def add(self, message: Any) -> None:
+        """Take a ``tf2_msgs/TFMessage``."""
+        for t in message.transforms:
+            self.parent[t.child_frame_id] = (t.header.frame_id, transform_pose(t.transform))
+
+    def _to_root(self, frame: str) -> tuple[str, Pose]:
+        pose = Pose.identity()
+        seen = {frame}
+        while frame in self.parent:
+            frame, step = self.parent[frame]
+            pose = step.compose(pose)
+            if frame in seen:
+                raise DatasetError(f"TF has a loop through frame {frame!r}")
+            seen.add(frame)
+        return frame, pose
+
+    def lookup(self, world: str, frame: str) -> Pose | None:
+        """``frame``'s pose in ``world``, or None while they are not connected.
+
+        A frame whose parent is ``world`` gets its transform as recorded (no composition
+        with identities, which could move its rotation by an ulp).
+        """
+        if frame == world:
+            return Pose.identity()
+        direct = self.parent.get(frame)
+        if direct is not None and direct[0] == world:
+            return direct[1]
+        root_a, frame_in_root = self._to_root(frame)
+        root_b, world_in_root = self._to_root(world)
+        if root_a != root_b:
+            return None
+        return world_in_root.inverse().compose(frame_in_root)
+
+
+@dataclass
+class ReplayCounts:
+    """What became of a recording's messages."""
+
+    depth_images: int = 0
+    frames_mapped: int = 0
+    frames_without_pose: int = 0
+    frames_without_info: int = 0
+
+
+def _camera(info: Any, noise: DepthNoiseModel, limits: tuple[float, float]) -> PinholeCamera:
+    k = np.asarray(info.k, dtype=np.float64)
+    return PinholeCamera(
+        float(k[0]), float(k[4]), float(k[2]), float(k[5]), int(info.width), int(info.height),
+        limits[0], limits[1], noise,
+    )  # fmt: skip
+
+
+def _pick(recording: Recording, given: str | None, types: tuple[str, ...], what: str) -> str:
+    if given is not None:
+        found = recording.require(given, what)
+        if found not in types:
+            raise DatasetError(f"{given} is a {found}, not a {what} ({', '.join(types)})")
+        return given
+    candidates = sorted(t for t, k in recording.channels.items() if k in types)
+    if what == "depth image":
+        candidates = [t for t in candidates if "depth" in t] or candidates
+    if len(candidates) != 1:
+        listed = ", ".join(candidates) or "none"
+        raise DatasetError(f"{recording.path}: name the {what} topic (candidates: {listed})")
+    return candidates[0]
+
+
+class Replayer:
+    """Feed a recording's depth and poses to a mapping node.
+
+    Args:
+        request: What to replay.
+        on_frame: Called after each mapped frame with the mapping node.
+    """
+
+    def __init__(
+        self, request: ReplayRequest, on_frame: Callable[[MappingNode], None] | None = None
+    ) -> None:
+        self.request = request
+        self.recording = Recording(request.path)
+        self.on_frame = on_frame
+        self.counts = ReplayCounts()
+        self.mapping: MappingNode | None = None
+        meta = self.recording.metadata
+        self.footfall = "footfall/recording" in meta
+        camera = meta.get("footfall/camera", {})
+        if camera:
+            self.noise = DepthNoiseModel(
+                float(camera["noise_base_m"]),
+                float(camera["noise_quadratic_per_m"]),
+                float(camera["noise_offset_m"]),
+            )
+            self.limits = (float(camera["min_range_m"]), float(camera["max_range_m"]))
+        else:
+            self.noise = sensor_noise(request.sensor)
+            self.limits = (0.0, 10.0)
+        self.depth_topic = _pick(
+            self.recording, request.depth_topic, ("sensor_msgs/msg/Image",), "depth image"
+        )
+        info = request.info_topic
+        if info is None:
+            beside = self.depth_topic.rsplit("/", 1)[0] + "/camera_info"
+            info = beside if beside in self.recording.channels else None
+        self.info_topic = _pick(
+            self.recording, info, ("sensor_msgs/msg/CameraInfo",), "camera info"
+        )
+        self.tf_frames = request.tf_frames
+        self.pose_topic = request.pose_topic
+        if self.footfall and self.tf_frames is None and self.pose_topic is None:
+            self.tf_frames = (WORLD_FRAME, CAMERA_FRAME)
+        if self.tf_frames is None and self.pose_topic is None:
+            self.pose_topic = _pick(self.recording, None, POSE_TYPES, "camera pose")
+        if self.pose_topic is not None:
+            _pick(self.recording, self.pose_topic, POSE_TYPES, "camera pose")
+        elif "/tf" not in self.recording.channels and "/tf_static" not in self.recording.channels:
+            raise DatasetError(f"{request.path}: no /tf topic to look the camera pose up in")
+
+    def map_config(self) -> tuple[HeightMapConfig, ScoreConfig, int]:
+        """The mapping settings: the recording's, else footfall map's for a recording."""
+        m = self.recording.metadata.get("footfall/mapping")
+        fusion = self.request.fusion
+        if m is None:
+            return HeightMapConfig(fusion=fusion or "variance"), ScoreConfig(), 1
+
+        def restore(kind: type, prefix: str) -> dict[str, object]:
+            defaults = kind()
+            values: dict[str, object] = {}
+            for f in fields(kind):
+                text = m.get(f"{prefix}.{f.name}")
+                if text is not None:
+                    cast = type(getattr(defaults, f.name))
+                    values[f.name] = str(text) if issubclass(cast, str) else cast(float(text))
+            return values
+
+        map_values = restore(HeightMapConfig, "map")
+        if fusion is not None:
+            map_values["fusion"] = fusion
+        score = ScoreConfig(**restore(ScoreConfig, "score"))  # type: ignore[arg-type]
+        return HeightMapConfig(**map_values), score, int(m.get("stride", "1"))  # type: ignore[arg-type]
+
+    def _poses(self) -> tuple[list[float], list[Pose]]:
+        times: list[float] = []
+        poses: list[Pose] = []
+        assert self.pose_topic is not None
+        for m in self.recording.messages({self.pose_topic}):
+            body = m.message.pose.pose if m.typename.startswith("nav_msgs") else m.message.pose
+            times.append(seconds(m.message.header.stamp))
+            poses.append(pose_of(body))
+        order = np.argsort(times, kind="stable")
+        return [times[k] for k in order], [poses[k] for k in order]
+
+    def _mapping_at(self, bus: InProcessBus, xy: tuple[float, float]) -> MappingNode:
+        """The mapping node, started centred on ``xy`` (the recording's centre if it has one)."""
+        if self.mapping is None:
+            config, score, stride = self.map_config()
+            meta = self.recording.metadata.get("footfall/mapping", {})
+            if "centre_x" in meta:
+                xy = (float(meta["centre_x"]), float(meta["centre_y"]))
+            self.mapping = MappingNode(bus, config, score, False, centre=xy, stride=stride)
+        return self.mapping
+
+    def run(self) -> MappingNode:
+        """Replay the recording; returns the mapping node with the map it built and scored."""
+        bus = InProcessBus()
+        self.mapping = None
+        if "centre_x" in self.recording.metadata.get("footfall/mapping", {}):
+            self._mapping_at(bus, (0.0, 0.0))
+        times, poses = self._poses() if self.pose_topic is not None else ([], [])
+        tree = TransformTree()
+        topics = {self.depth_topic, self.info_topic, "/tf", "/tf_static", "/ground_prior"}
+        info = None
+        last_stamp = 0.0
+        start_wall, start_log = time.monotonic(), None
+        for m in self.recording.messages(topics):
+            if not self.request.fast:
+                start_log = m.log_time_ns if start_log is None else start_log
+                due = (m.log_time_ns - start_log) * 1e-9 / max(self.request.rate, 1e-9)
+                time.sleep(max(0.0, due - (time.monotonic() - start_wall)))
+            if m.topic in ("/tf", "/tf_static"):
+                tree.add(m.message)
+                if self.footfall and self.pose_topic is None:
+                    self._publish_tf_pose(bus, m, tree)
+            elif m.topic == "/ground_prior" and self.mapping is not None:
+                g = m.message
+                position = np.array([g.body_position.x, g.body_position.y, g.body_position.z])
+                bus.publish(
+                    GroundPrior.TOPIC,
+                    GroundPrior(seconds(g.header.stamp), position, g.ground_z, g.radius),
+                )
+            elif m.topic == self.info_topic:
+                info = m.message
+            elif m.topic == self.depth_topic:
+                self.counts.depth_images += 1
+                if info is None:
+                    self.counts.frames_without_info += 1
+                    continue
+                stamp = seconds(m.message.header.stamp)
+                if not self.footfall:
+                    pose = self._pose_at(stamp, times, poses, tree)
+                    if pose is None:
+                        self.counts.frames_without_pose += 1
+                        continue
+                    self._mapping_at(bus, (float(pose.position[0]), float(pose.position[1])))
+                    bus.publish(PoseEstimate.TOPIC, PoseEstimate(stamp, pose, pose))
+                if self.mapping is None:  # a footfall recording's image before any pose
+                    self.counts.frames_without_pose += 1
+                    continue
+                depth, scale = depth_array(m.message)
+                camera = _camera(info, self.noise, self.limits)
+                before = self.mapping.frames
+                number = self.counts.depth_images
+                frame = DepthFrame(stamp, depth, camera, Pose.identity(), scale, number)
+                bus.publish(DepthFrame.TOPIC, frame)
+                self.counts.frames_mapped += self.mapping.frames - before
+                last_stamp = stamp
+                if self.on_frame is not None:
+                    self.on_frame(self.mapping)
+        if self.mapping is None or self.mapping.frames == 0:
+            raise DatasetError(f"{self.request.path}: no depth image could be mapped")
+        self.counts.frames_mapped = self.mapping.frames
+        self.mapping.publish(last_stamp)
+        return self.mapping
+
+    def _publish_tf_pose(self, bus: InProcessBus, m: RecordedMessage, tree: TransformTree) -> None:
+        """Publish a pose estimate from a footfall recording's TF message of the camera."""
+        children = {t.child_frame_id for t in m.message.transforms}
+        world, camera_frame = self.tf_frames  # type: ignore[misc]
+        if camera_frame not in children:
+            return
+        camera = tree.lookup(world, camera_frame)
+        body = tree.lookup(world, BODY_FRAME) if BODY_FRAME in children else camera
+        if camera is None or body is None:
+            return
+        stamp = seconds(m.message.transforms[0].header.stamp)
+        self._mapping_at(bus, (float(body.position[0]), float(body.position[1])))
+        bus.publish(PoseEstimate.TOPIC, PoseEstimate(stamp, camera, body))
+
+    def _pose_at(
+        self, stamp: float, times: list[float], poses: list[Pose], tree: TransformTree
+    ) -> Pose | None:
+        if self.tf_frames is not None:
+            return tree.lookup(*self.tf_frames)
+        k = bisect.bisect_left(times, stamp)
+        best = min((c for c in (k - 1, k) if 0 <= c < len(times)), default=None,
+                   key=lambda c: abs(times[c] - stamp))  # fmt: skip
+        if best is None or abs(times[best] - stamp) > self.request.max_pose_gap_s:
+            return None
+        return poses[best]
