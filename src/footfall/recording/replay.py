@@ -154,7 +154,7 @@ class ReplayCounts:
 
 
 def _camera(info: Any, noise: DepthNoiseModel, limits: tuple[float, float]) -> PinholeCamera:
-    k = np.asarray(info.k, dtype=np.float64)
+    k = np.asarray(info.k if hasattr(info, "k") else info.K, dtype=np.float64)  # ROS 1: K
     return PinholeCamera(
         float(k[0]), float(k[4]), float(k[2]), float(k[5]), int(info.width), int(info.height),
         limits[0], limits[1], noise,

@@ -214,8 +214,11 @@ def image(stamp: float, frame: str, array: npt.NDArray, encoding: str) -> Any:
 def depth_image(frame: DepthFrame) -> Any:
     """The depth of a frame: ``32FC1`` metres, or ``16UC1`` millimetres when it is."""
     d = np.asarray(frame.depth)
-    if d.dtype.kind == "u" and d.dtype.itemsize == 2 and frame.depth_scale == 0.001:
-        return image(frame.stamp, CAMERA_FRAME, d.astype("<u2"), "16UC1")
+    units = frame.intrinsics.units_per_metre_for(d, frame.depth_scale)
+    if d.dtype.kind == "u" and units and units % 1000 == 0:
+        per_mm = int(units) // 1000  # TUM's 1/5000 m: 5 units a millimetre
+        if per_mm == 1 or not np.any(d % per_mm):
+            return image(frame.stamp, CAMERA_FRAME, (d // per_mm).astype("<u2"), "16UC1")
     if d.dtype.kind == "f":
         return image(frame.stamp, CAMERA_FRAME, d.astype("<f4"), "32FC1")
     metres = frame.intrinsics.to_metres(d, frame.depth_scale)

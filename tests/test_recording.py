@@ -1,0 +1,270 @@
+"""Recordings: a run to MCAP and back to the same map; ROS 2 and ROS 1 bags replayed."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import shared_data
+from footfall.cli import main
+from footfall.errors import DatasetError
+from footfall.recording.replay import Replayer, ReplayRequest
+from footfall.recording.ros_types import typestore
+from footfall.recording.session import Recorders
+from footfall.reports.walk import WalkRequest, prepare_walk
+from footfall.runtime.bus import InProcessBus
+from footfall.sim.walk import simulate_walk
+
+LAYERS = ("heights", "known", "spread", "variance")
+
+
+@pytest.fixture(scope="module")
+def recorded_walk(tmp_path_factory):
+    """A seeded 3 s stairs walk recorded to MCAP, and its live map."""
+    path = tmp_path_factory.mktemp("rec") / "walk.mcap"
+    job = prepare_walk(WalkRequest(terrain="stairs", seconds=3.0, seed=3))
+    robots = []
+    with Recorders(path) as recorders:
+
+        def built(robot):
+            robots.append(robot)
+            recorders.mapping_started(robot.mapping)
+
+        bus = recorders.attach(InProcessBus())
+        simulate_walk(job.spec, job.settings, terrain=job.terrain, bus=bus, on_build=built)
+    return path, robots[0].mapping.height_map.snapshot(), robots[0].mapping.frames
+
+
+def test_a_recorded_walk_replays_to_the_same_map(recorded_walk):
+    """Bit-identical height, known, spread and variance arrays from the replay."""
+    path, live, frames = recorded_walk
+    mapping = Replayer(ReplayRequest(path, fast=True)).run()
+    replayed = mapping.height_map.snapshot()
+    assert mapping.frames == frames > 20
+    assert replayed.origin == live.origin
+    for layer in LAYERS:
+        np.testing.assert_array_equal(getattr(replayed, layer), getattr(live, layer), err_msg=layer)
+
+
+def test_every_channel_has_a_schema_the_mcap_reader_reads(recorded_walk):
+    """The mcap library opens the file; every channel has a ros2msg schema, CDR messages;
+    the standard and footfall types are there."""
+    from mcap.reader import make_reader
+
+    path, _, _ = recorded_walk
+    with path.open("rb") as stream:
+        summary = make_reader(stream).get_summary()
+    channels = {c.topic: c for c in summary.channels.values()}
+    for channel in channels.values():
+        schema = summary.schemas[channel.schema_id]
+        assert schema.encoding == "ros2msg" and schema.data and channel.message_encoding == "cdr"
+    types = {t: summary.schemas[c.schema_id].name for t, c in channels.items()}
+    assert types["/camera/depth/image_raw"] == "sensor_msgs/msg/Image"
+    assert types["/camera/depth/camera_info"] == "sensor_msgs/msg/CameraInfo"
+    assert types["/camera/pose"] == "geometry_msgs/msg/PoseStamped"
+    assert types["/tf"] == "tf2_msgs/msg/TFMessage"
+    assert types["/map/grid"] == "grid_map_msgs/msg/GridMap"
+    assert types["/map/occupancy"] == "nav_msgs/msg/OccupancyGrid"
+    assert types["/effector_targets"] == "footfall_msgs/msg/EffectorTargets"
+    assert types["/gait_status"] == "footfall_msgs/msg/GaitStatus"
+    gait = summary.schemas[channels["/gait_status"].schema_id].data.decode()
+    assert "string frozen_reason" in gait and "MSG: std_msgs/Header" in gait
+
+
+def _redwood_bag(tmp_path: Path, storage: str, tum: Path) -> Path:
+    """The shared Redwood frames as a ROS 2 bag written with rosbags: 16UC1 depth (the
+    millimetre PNGs), CameraInfo and PoseStamped (the converted sequence's camera poses,
+    its y-up world turned z-up)."""
+    from PIL import Image
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    from footfall.datasets.tum import read_tum_sequence, up_to_z
+    from footfall.messages import DepthFrame
+    from footfall.recording import ros_types as rt
+    from footfall.sensing.camera import PinholeCamera
+    from footfall.sensing.pose import Pose
+
+    source = shared_data("rgbd/redwood_livingroom")
+    store = typestore()
+    bag = tmp_path / f"redwood_{storage}"
+    align = Pose(np.zeros(3), up_to_z((0.0, 1.0, 0.0)))
+    camera = PinholeCamera(525, 525, 319.5, 239.5, 640, 480)
+    frames, _ = read_tum_sequence(tum)
+    files = sorted((source / "depth").glob("*.png"))
+    plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    kinds = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo", "geometry_msgs/msg/PoseStamped")
+    with Writer(bag, version=9, storage_plugin=plugin) as writer:
+        image_c, info_c, pose_c = (
+            writer.add_connection(topic, kind, typestore=store)
+            for topic, kind in zip(
+                ("/depth", "/depth/camera_info", "/camera_pose"), kinds, strict=True
+            )
+        )
+        for file, frame in zip(files, frames, strict=True):
+            t, ns = frame.timestamp, round(frame.timestamp * 1e9)
+            mm = np.array(Image.open(file)).astype(np.uint16)
+            depth = DepthFrame(t, mm, camera, Pose.identity(), 0.001)
+            pose = align.compose(frame.camera_pose)
+            stamped = store.types[kinds[2]](header=rt.header(t, "world"), pose=rt._pose(pose))
+            writer.write(info_c, ns, store.serialize_cdr(rt.camera_info(depth), kinds[1]))
+            writer.write(image_c, ns, store.serialize_cdr(rt.depth_image(depth), kinds[0]))
+            writer.write(pose_c, ns, store.serialize_cdr(stamped, kinds[2]))
+    return bag
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_a_ros2_bag_replays_to_the_map_of_the_converted_sequence(tmp_path, storage):
+    """A ROS 2 bag of the Redwood frames replays to the same map as `footfall map --tum` of
+    the converted sequence (bit for bit: millimetres and TUM units give the same metres)."""
+    source = shared_data("rgbd/redwood_livingroom")
+    assert main(["convert", "redwood", str(source), str(tmp_path / "tum")]) == 0
+    bag = _redwood_bag(tmp_path, storage, tmp_path / "tum")
+    _map_tum(tmp_path / "tum", tmp_path / "m")
+    args = [
+        "replay",
+        str(bag),
+        "--fast",
+        "--pose-topic",
+        "/camera_pose",
+        "--out",
+        str(tmp_path / "r"),
+    ]
+    assert main(args) == 0
+    live, replayed = np.load(tmp_path / "m" / "map.npz"), np.load(tmp_path / "r" / "map.npz")
+    for layer in ("height", "variance", "spread", "score", "valid", "known", "origin_xy_m"):
+        np.testing.assert_array_equal(replayed[layer], live[layer], err_msg=layer)
+    metrics = json.loads((tmp_path / "r" / "metrics.json").read_text())
+    assert metrics["frames"] == 5 and metrics["floor_valid_fraction"] >= 0.9
+
+
+def _map_tum(tum: Path, out: Path) -> None:
+    assert main(["map", "--tum", str(tum), "--up", "0", "1", "0", "--out", str(out)]) == 0
+
+
+def test_converted_mcap_replays_to_the_same_map(tmp_path):
+    """`footfall convert redwood X file.mcap` then `footfall replay` = `footfall map --tum`."""
+    source = shared_data("rgbd/redwood_livingroom")
+    assert main(["convert", "redwood", str(source), str(tmp_path / "r.mcap")]) == 0
+    assert main(["convert", "redwood", str(source), str(tmp_path / "tum")]) == 0
+    _map_tum(tmp_path / "tum", tmp_path / "m")
+    assert main(["replay", str(tmp_path / "r.mcap"), "--fast", "--out", str(tmp_path / "p")]) == 0
+    live, replayed = np.load(tmp_path / "m" / "map.npz"), np.load(tmp_path / "p" / "map.npz")
+    for layer in ("height", "score", "valid", "known"):
+        np.testing.assert_array_equal(replayed[layer], live[layer], err_msg=layer)
+
+
+def test_a_ros1_bag_replays(tmp_path):
+    """A ROS 1 bag (rosbags' writer, ROS 1 types) of a flat floor, 32FC1 depth and the
+    camera's PoseStamped: replays to a flat floor at z = 0."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from footfall.pointcloud.ground import CameraOverFloor
+    from footfall.sensing.camera import PinholeCamera
+    from footfall.sensing.pose import Pose
+
+    ros1 = get_typestore(Stores.ROS1_NOETIC)
+    T = ros1.types
+    camera = PinholeCamera(120, 120, 79.5, 59.5, 160, 120)
+    floor = CameraOverFloor.from_angles(0.6, np.radians(40))
+    u, v = np.meshgrid(np.arange(160), np.arange(120))
+    rays = np.stack(
+        [(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], -1
+    )
+    down = floor.rotation_camera_to_map.apply(rays.reshape(-1, 3))[:, 2]
+    depth = np.where(down < -1e-6, 0.6 / -down, 0.0).reshape(120, 160).astype("<f4")
+
+    def header(t, frame):
+        stamp = T["builtin_interfaces/msg/Time"](sec=int(t), nanosec=round((t % 1) * 1e9))
+        return T["std_msgs/msg/Header"](seq=0, stamp=stamp, frame_id=frame)
+
+    def stamped(t, pose):
+        x, y, z = pose.position
+        qx, qy, qz, qw = pose.rotation.as_quat()
+        return T["geometry_msgs/msg/PoseStamped"](
+            header=header(t, "odom"),
+            pose=T["geometry_msgs/msg/Pose"](
+                position=T["geometry_msgs/msg/Point"](x=x, y=y, z=z),
+                orientation=T["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw),
+            ),
+        )
+
+    pose = Pose(np.array([1.0, 0.5, 0.6]), floor.rotation_camera_to_map)
+    roi = T["sensor_msgs/msg/RegionOfInterest"](
+        x_offset=0, y_offset=0, height=0, width=0, do_rectify=False
+    )
+    names = ("geometry_msgs/msg/PoseStamped", "sensor_msgs/msg/CameraInfo", "sensor_msgs/msg/Image")
+    topics = ("/cam/pose", "/cam/depth/camera_info", "/cam/depth/image")
+    bag = tmp_path / "floor.bag"
+    with Writer(bag) as writer:
+        connections = [
+            writer.add_connection(topic, name, typestore=ros1)
+            for topic, name in zip(topics, names, strict=True)
+        ]
+        for k in range(3):
+            t = 0.1 * k + 0.01
+            info = T[names[1]](
+                header=header(t, "cam"), height=120, width=160, distortion_model="plumb_bob",
+                D=np.zeros(5), K=camera.matrix.ravel(), R=np.eye(3).ravel(),
+                P=np.hstack([camera.matrix, np.zeros((3, 1))]).ravel(), binning_x=0,
+                binning_y=0, roi=roi,
+            )  # fmt: skip
+            image = T[names[2]](
+                header=header(t, "cam"), height=120, width=160, encoding="32FC1",
+                is_bigendian=0, step=160 * 4, data=np.frombuffer(depth.tobytes(), np.uint8),
+            )  # fmt: skip
+            for c, msg, name in zip(
+                connections, (stamped(t, pose), info, image), names, strict=True
+            ):
+                writer.write(c, round(t * 1e9), ros1.serialize_ros1(msg, name))
+    out = tmp_path / "out"
+    args = ["replay", str(bag), "--fast", "--pose-topic", "/cam/pose", "--out", str(out)]
+    assert main(args) == 0
+    arrays = np.load(out / "map.npz")
+    heights = arrays["height"][arrays["known"]]
+    assert heights.size > 100 and np.abs(heights).max() < 0.01
+    assert json.loads((out / "metrics.json").read_text())["frames"] == 3
+
+
+def test_replay_errors_name_the_problem(tmp_path, recorded_walk):
+    """A missing file, a missing topic, and a file that is not a recording."""
+    with pytest.raises(DatasetError, match="missing recording"):
+        Replayer(ReplayRequest(tmp_path / "none.mcap"))
+    path, _, _ = recorded_walk
+    with pytest.raises(DatasetError, match="no depth image topic '/nope'"):
+        Replayer(ReplayRequest(path, depth_topic="/nope"))
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(b"not an mcap file at all")
+    with pytest.raises(DatasetError, match="not a readable MCAP"):
+        Replayer(ReplayRequest(junk))
+    truncated = tmp_path / "cut.mcap"
+    truncated.write_bytes(path.read_bytes()[:200_000])
+    with pytest.raises(DatasetError):
+        Replayer(ReplayRequest(truncated, fast=True)).run()
+
+
+def test_walk_record_option_writes_a_replayable_file(tmp_path):
+    """`footfall walk --record` writes an MCAP file `footfall replay` maps."""
+    rec = tmp_path / "w.mcap"
+    assert (
+        main(
+            [
+                "walk",
+                "--terrain",
+                "course",
+                "--seconds",
+                "1.5",
+                "--record",
+                str(rec),
+                "--out",
+                str(tmp_path / "w"),
+            ]
+        )
+        == 0
+    )
+    assert rec.stat().st_size > 0
+    assert main(["replay", str(rec), "--fast", "--out", str(tmp_path / "r")]) == 0
+    assert json.loads((tmp_path / "r" / "metrics.json").read_text())["frames"] > 5
