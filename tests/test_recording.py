@@ -268,3 +268,23 @@ def test_walk_record_option_writes_a_replayable_file(tmp_path):
     assert rec.stat().st_size > 0
     assert main(["replay", str(rec), "--fast", "--out", str(tmp_path / "r")]) == 0
     assert json.loads((tmp_path / "r" / "metrics.json").read_text())["frames"] > 5
+
+
+@pytest.mark.parametrize("source", ["sim", "tum"])
+def test_map_record_replays_to_the_map_it_wrote(tmp_path, source):
+    """`footfall map --record` (simulated terrain, or a recorded sequence) and `footfall
+    replay` of that file write the same map.npz."""
+    out, rec = tmp_path / "m", tmp_path / "m.mcap"
+    if source == "sim":
+        args = ["map", "--terrain", "stairs", "--seconds", "2", "--image-size", "160", "120"]
+    else:
+        tum = tmp_path / "tum"
+        assert (
+            main(["convert", "redwood", str(shared_data("rgbd/redwood_livingroom")), str(tum)]) == 0
+        )
+        args = ["map", "--tum", str(tum), "--up", "0", "1", "0"]
+    assert main([*args, "--record", str(rec), "--out", str(out)]) == 0
+    assert main(["replay", str(rec), "--fast", "--out", str(tmp_path / "r")]) == 0
+    live, replayed = np.load(out / "map.npz"), np.load(tmp_path / "r" / "map.npz")
+    for layer in ("height", "variance", "spread", "score", "valid", "known", "origin_xy_m"):
+        np.testing.assert_array_equal(replayed[layer], live[layer], err_msg=layer)

@@ -7,7 +7,13 @@ from pathlib import Path
 
 from rich.console import Console
 
-from footfall.cli.common import format_value, print_table, sim_progress, wrote
+from footfall.cli.common import (
+    add_recording_options,
+    format_value,
+    print_table,
+    sim_progress,
+    wrote,
+)
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -108,6 +114,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--depth-scale", type=float, default=1.0 / 5000.0, help="metres per depth unit (with --tum)"
     )
+    add_recording_options(p)
     p.add_argument("--out", type=Path, default=Path("footfall-out/map"), help="output folder")
     p.set_defaults(handler=run)
 
@@ -132,6 +139,9 @@ def run(args: argparse.Namespace, console: Console) -> int:
         camera_height=args.camera_height,
         camera_pitch_deg=args.camera_pitch_deg,
         camera_roll_deg=args.camera_roll_deg,
+        record=args.record,
+        rerun=args.rerun,
+        rerun_spawn=args.rerun_spawn,
     )
     if args.tum is not None:
         console.print(f"Mapping recorded sequence {args.tum}")

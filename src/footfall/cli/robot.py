@@ -7,7 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from footfall.cli.common import wrote
+from footfall.cli.common import add_recording_options, wrote
 from footfall.errors import ConfigError
 
 
@@ -97,6 +97,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     source.add_argument("--map", type=Path, help="what the capture sees: a map file")
     source.add_argument("--cloud", type=Path, help="what the capture sees: a point cloud")
     add_network_options(p, listen=[DEFAULT_ENDPOINT], connect=[])
+    add_recording_options(p)
     p.add_argument("--out", type=Path, default=Path("footfall-out/robot"), help="output folder")
     p.set_defaults(handler=run)
 
@@ -148,7 +149,14 @@ def run(args: argparse.Namespace, console: Console) -> int:
     if args.case is not None or args.map is not None or args.cloud is not None:
         raise ConfigError("--case, --map and --cloud go with --biped")
     request = RobotRequest(
-        walk=WalkRequest(terrain=args.sim, seed=args.seed, seconds=args.seconds),
+        walk=WalkRequest(
+            terrain=args.sim,
+            seed=args.seed,
+            seconds=args.seconds,
+            record=args.record,
+            rerun=args.rerun,
+            rerun_spawn=args.rerun_spawn,
+        ),
         network=network_config(args),
         seconds=args.seconds,
         stop_at_goal=args.stop_at_goal,

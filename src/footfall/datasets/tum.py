@@ -13,6 +13,7 @@ that axis becomes +z of the map frame.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -319,6 +320,8 @@ def map_tum_sequence(
     depth_scale: float = TUM_DEPTH_SCALE,
     stride: int = 1,
     camera_pose: Pose | None = None,
+    bus: InProcessBus | None = None,
+    on_mapping: Callable[[MappingNode], None] | None = None,
 ) -> SequenceMap:
     """Build the height map of a recorded sequence, following the camera.
 
@@ -332,11 +335,13 @@ def map_tum_sequence(
         stride: Use every ``stride``-th pixel row and column.
         camera_pose: The camera's fixed pose in a z-up world, for frames without a
             trajectory.
+        bus: The bus to play on (a recorder may tap it); a new one by default.
+        on_mapping: Called with the mapping node once it stands.
 
     Returns:
         The map, its scores, the camera path and metrics.
     """
-    bus = InProcessBus()
+    bus = bus if bus is not None else InProcessBus()
     source = TumSequenceSource(bus, folder, camera, up, depth_scale, camera_pose)
     start = source.centres[0].position
     mapping = MappingNode(
@@ -347,6 +352,8 @@ def map_tum_sequence(
         centre=(float(start[0]), float(start[1])),
         stride=stride,
     )
+    if on_mapping is not None:
+        on_mapping(mapping)
     source.play()
     mapping.publish(source.frames[-1].timestamp)
     snapshot = mapping.height_map.snapshot()

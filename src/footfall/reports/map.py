@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -13,6 +14,10 @@ from footfall.errors import ConfigError, DatasetError
 from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
 from footfall.reports import write_json
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
+
+if TYPE_CHECKING:
+    from footfall.recording.session import Recorders
+    from footfall.runtime.bus import InProcessBus
 
 
 @dataclass(frozen=True)
@@ -39,6 +44,9 @@ class MapRequest:
         camera_height: Camera height above the floor [m], for frames without a trajectory.
         camera_pitch_deg: How far the camera looks down [deg], likewise.
         camera_roll_deg: How far its right side dips [deg], likewise.
+        record: An ``.mcap`` file to record every bus message to.
+        rerun: An ``.rrd`` file to log the run to for the rerun viewer.
+        rerun_spawn: Open a rerun viewer on the run.
     """
 
     terrain: str = "course"
@@ -56,6 +64,9 @@ class MapRequest:
     camera_height: float | None = None
     camera_pitch_deg: float | None = None
     camera_roll_deg: float | None = None
+    record: Path | None = None
+    rerun: Path | None = None
+    rerun_spawn: bool = False
 
     @property
     def fixed_camera(self) -> bool:
@@ -164,8 +175,25 @@ def run_map(request: MapRequest, on_tick: Callable[[float], None] | None = None)
     fusion = request.fusion or ("variance" if recorded else "latest")
     map_config = HeightMapConfig(fusion=fusion)
     score_config = score_config_for(request)
-    if recorded:
-        return _map_recording(request, map_config, score_config)
+    from footfall.recording.session import Recorders
+    from footfall.runtime.bus import InProcessBus
+
+    with Recorders(request.record, request.rerun, request.rerun_spawn) as recorders:
+        bus = recorders.attach(InProcessBus())
+        if recorded:
+            return _map_recording(request, map_config, score_config, bus, recorders)
+        return _map_simulation(request, map_config, score_config, on_tick, bus, recorders)
+
+
+def _map_simulation(
+    request: MapRequest,
+    map_config: HeightMapConfig,
+    score_config: ScoreConfig,
+    on_tick: Callable[[float], None] | None,
+    bus: InProcessBus,
+    recorders: Recorders,
+) -> MapReport:
+    """Map a terrain in simulation."""
     from footfall.robot.spec import load_spec
     from footfall.sim.model import CameraMount
     from footfall.sim.survey import MappingSettings, simulate_mapping
@@ -180,14 +208,24 @@ def run_map(request: MapRequest, on_tick: Callable[[float], None] | None = None)
         map=map_config,
         score=score_config,
     )
-    survey = simulate_mapping(load_spec("default"), settings, on_tick=on_tick)
+    survey = simulate_mapping(
+        load_spec("default"),
+        settings,
+        on_tick=on_tick,
+        bus=bus,
+        on_mapping=recorders.mapping_started,
+    )
     return MapReport(
         survey.snapshot, survey.scores, survey.path_xy, "robot path", survey.metrics, score_config
     )
 
 
 def _map_recording(
-    request: MapRequest, map_config: HeightMapConfig, score_config: ScoreConfig
+    request: MapRequest,
+    map_config: HeightMapConfig,
+    score_config: ScoreConfig,
+    bus: InProcessBus,
+    recorders: Recorders,
 ) -> MapReport:
     """Map a recorded sequence, or frames from a given camera pose."""
     import math
@@ -229,6 +267,8 @@ def _map_recording(
         score_config,
         request.depth_scale,
         camera_pose=pose,
+        bus=bus,
+        on_mapping=recorders.mapping_started,
     )
     return MapReport(
         sequence.snapshot,

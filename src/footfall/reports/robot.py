@@ -9,7 +9,9 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from footfall.recording.session import Recorders
 from footfall.reports.walk import WalkReport, WalkRequest, prepare_walk
+from footfall.runtime.bus import InProcessBus
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
 from footfall.sim.robot import OUTGOING, RobotSettings, run_robot
 
@@ -71,7 +73,19 @@ def run_robot_report(
             stop_at_goal=request.stop_at_goal,
             outgoing={**OUTGOING, **request.rates},
         )
-        result, _ = run_robot(job.spec, settings, network, on_tick=on_tick, should_stop=stop)
+        w = request.walk
+        with Recorders(w.record, w.rerun, w.rerun_spawn) as recorders:
+            result, _ = run_robot(
+                job.spec,
+                settings,
+                network,
+                on_tick=on_tick,
+                should_stop=stop,
+                local=recorders.attach(InProcessBus()),
+                on_build=lambda robot: (
+                    recorders.mapping_started(robot.mapping) if robot.mapping is not None else None
+                ),
+            )
     return WalkReport(job, result)
 
 

@@ -66,6 +66,8 @@ def run_robot(
     network: Bus,
     on_tick: Callable[[float], None] | None = None,
     should_stop: Callable[[], bool] | None = None,
+    local: InProcessBus | None = None,
+    on_build: Callable[[SimRobot], None] | None = None,
 ) -> tuple[WalkResult, Bridge]:
     """Run the simulated robot on the network until done.
 
@@ -75,16 +77,21 @@ def run_robot(
         network: The network bus (a ZenohBus) the robot is bridged to.
         on_tick: Called with the run time [s] after each tick.
         should_stop: Ends the run when it returns True (a signal handler's flag).
+        local: The robot's own bus (a recorder may tap it: what comes in from the network
+            is published on it too); a new one by default.
+        on_build: Called with the robot once its nodes stand.
 
     Returns:
         The record and metrics, and the bridge (its traffic counts).
     """
     walk = settings.walk
     terrain = make_terrain(walk.terrain, seed=walk.seed)
-    local = InProcessBus()
+    local = local if local is not None else InProcessBus()
     robot = SimRobot.build(
         spec, walk, terrain, local, command_timeout=settings.command_timeout, color=True
     )
+    if on_build is not None:
+        on_build(robot)
     judge = TerrainTask(local, terrain, walk.command, settings.stop_at_goal, frozen_timeout=None)
     bridge = Bridge(local, network, settings.outgoing, INCOMING)
     if hasattr(network, "malformed"):  # malformed messages from the network count too

@@ -160,7 +160,11 @@ def path_coverage(
 
 
 def simulate_mapping(
-    spec: HexapodSpec, settings: MappingSettings, on_tick: Callable[[float], None] | None = None
+    spec: HexapodSpec,
+    settings: MappingSettings,
+    on_tick: Callable[[float], None] | None = None,
+    bus: InProcessBus | None = None,
+    on_mapping: Callable[[MappingNode], None] | None = None,
 ) -> MappingResult:
     """Walk the (blind) robot across a terrain while mapping it with the body camera.
 
@@ -168,6 +172,8 @@ def simulate_mapping(
         spec: The robot.
         settings: What to map.
         on_tick: Progress callback with the walk time [s].
+        bus: The bus to run the nodes on (a recorder may tap it); a new one by default.
+        on_mapping: Called with the mapping node once it stands.
 
     Returns:
         The final map, its scores and the metrics.
@@ -177,11 +183,13 @@ def simulate_mapping(
     backend = MujocoHexapod(spec, terrain, settings.camera)
     backend.advance(0.3)
     noise = SlamNoise(settings.slam, rng) if settings.noise == "slam" else None
-    bus = InProcessBus()
+    bus = bus if bus is not None else InProcessBus()
     body = true_body_pose(backend).position
     mapping = MappingNode(
         bus, settings.map, settings.score, publish_every_frame=False, centre=(body[0], body[1])
     )
+    if on_mapping is not None:
+        on_mapping(mapping)
     camera = SimCameraNode(bus, backend, settings.camera)
     SimPoseNode(bus, camera, noise)
     controller = WalkController(
