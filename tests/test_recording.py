@@ -288,3 +288,65 @@ def test_map_record_replays_to_the_map_it_wrote(tmp_path, source):
     live, replayed = np.load(out / "map.npz"), np.load(tmp_path / "r" / "map.npz")
     for layer in ("height", "variance", "spread", "score", "valid", "known", "origin_xy_m"):
         np.testing.assert_array_equal(replayed[layer], live[layer], err_msg=layer)
+
+
+def test_rerun_recording_holds_the_run(tmp_path, recorded_walk):
+    """A walk logged with --rerun loads back with rerun's own reader and holds the depth
+    image, the cloud, the map surface and score, footholds, body and feet, swing paths and
+    the body series; the biped's obstacles, path, footsteps and COM log too."""
+    pytest.importorskip("rerun")
+    from rerun.chunk import RrdReader
+
+    from footfall.messages.biped import BipedPlan, Obstacles
+    from footfall.recording.rerun_log import RerunLogger
+
+    rrd = tmp_path / "walk.rrd"
+    args = ["walk", "--terrain", "stairs", "--seconds", "2.5", "--rerun", str(rrd)]
+    assert main([*args, "--out", str(tmp_path / "w")]) == 0
+    entities = set(RrdReader(rrd).store().schema().entity_paths())
+    for entity in (
+        "/world/camera/depth",
+        "/world/points",
+        "/world/map/surface",
+        "/map/score",
+        "/world/footholds/nominal",
+        "/world/footholds/chosen",
+        "/world/body",
+        "/world/feet/rf",
+        "/world/swing",
+        "/plots/body_height_m",
+        "/plots/tilt_deg",
+    ):
+        assert entity in entities, entity
+    biped = tmp_path / "biped.rrd"
+    logger = RerunLogger(biped)
+    logger.tap("obstacles", Obstacles(0.0, np.array([1.0]), np.array([0.5]), np.array([0.3])))
+    plan = BipedPlan(
+        0.0,
+        np.array([[0.0, 0.0], [2.0, 0.0]]),
+        np.array([[0.1, -0.1, 0.0], [0.3, 0.1, 0.0]]),
+        np.array([False, True]),
+        np.array([[0.0, 0.0], [0.2, 0.0]]),
+        2.0,
+        0,
+    )
+    logger.tap("plan", plan)
+    logger.close()
+    entities = set(RrdReader(biped).store().schema().entity_paths())
+    for entity in ("obstacles", "path", "footsteps", "com"):
+        assert f"/world/biped/{entity}" in entities, entity
+
+
+def test_replay_logs_to_rerun(tmp_path, recorded_walk):
+    """`footfall replay --rerun` logs the replayed depth, cloud and final map."""
+    pytest.importorskip("rerun")
+    from rerun.chunk import RrdReader
+
+    path, _, _ = recorded_walk
+    rrd = tmp_path / "replay.rrd"
+    assert (
+        main(["replay", str(path), "--fast", "--rerun", str(rrd), "--out", str(tmp_path / "o")])
+        == 0
+    )
+    entities = set(RrdReader(rrd).store().schema().entity_paths())
+    assert {"/world/camera/depth", "/world/points", "/world/map/surface", "/map/score"} <= entities

@@ -26,6 +26,7 @@ import numpy.typing as npt
 from footfall.errors import DatasetError
 from footfall.mapping.height_map import HeightMapConfig
 from footfall.messages import DepthFrame, GroundPrior, PoseEstimate
+from footfall.messages.codec import Message
 from footfall.nodes.mapping import MappingNode
 from footfall.recording.reader import RecordedMessage, Recording
 from footfall.recording.ros_types import BODY_FRAME, CAMERA_FRAME, WORLD_FRAME, seconds
@@ -181,15 +182,15 @@ class Replayer:
 
     Args:
         request: What to replay.
-        on_frame: Called after each mapped frame with the mapping node.
+        taps: Callbacks that see every message the replay publishes (a rerun logger).
     """
 
     def __init__(
-        self, request: ReplayRequest, on_frame: Callable[[MappingNode], None] | None = None
+        self, request: ReplayRequest, taps: list[Callable[[str, Message], None]] | None = None
     ) -> None:
         self.request = request
         self.recording = Recording(request.path)
-        self.on_frame = on_frame
+        self.taps = list(taps or [])
         self.counts = ReplayCounts()
         self.mapping: MappingNode | None = None
         meta = self.recording.metadata
@@ -273,6 +274,8 @@ class Replayer:
     def run(self) -> MappingNode:
         """Replay the recording; returns the mapping node with the map it built and scored."""
         bus = InProcessBus()
+        for tap in self.taps:
+            bus.tap(tap)
         self.mapping = None
         if "centre_x" in self.recording.metadata.get("footfall/mapping", {}):
             self._mapping_at(bus, (0.0, 0.0))
@@ -324,8 +327,6 @@ class Replayer:
                 bus.publish(DepthFrame.TOPIC, frame)
                 self.counts.frames_mapped += self.mapping.frames - before
                 last_stamp = stamp
-                if self.on_frame is not None:
-                    self.on_frame(self.mapping)
         if self.mapping is None or self.mapping.frames == 0:
             raise DatasetError(f"{self.request.path}: no depth image could be mapped")
         self.counts.frames_mapped = self.mapping.frames

@@ -25,7 +25,7 @@ def run_replay(
         from footfall.recording.rerun_log import RerunLogger
 
         logger = RerunLogger(rerun, spawn=rerun_spawn)
-    replayer = Replayer(request, on_frame=logger.map_frame if logger is not None else None)
+    replayer = Replayer(request, taps=[logger.tap] if logger is not None else None)
     try:
         mapping = replayer.run()
     finally:
