@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import bisect
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -152,6 +153,8 @@ class ReplayCounts:
     frames_mapped: int = 0
     frames_without_pose: int = 0
     frames_without_info: int = 0
+    time_gaps: int = 0
+    longest_gap_s: float = 0.0
 
 
 def _camera(info: Any, noise: DepthNoiseModel, limits: tuple[float, float]) -> PinholeCamera:
@@ -173,7 +176,8 @@ def _pick(recording: Recording, given: str | None, types: tuple[str, ...], what:
         candidates = [t for t in candidates if "depth" in t] or candidates
     if len(candidates) != 1:
         listed = ", ".join(candidates) or "none"
-        raise DatasetError(f"{recording.path}: name the {what} topic (candidates: {listed})")
+        hint = " (or --tf-frames WORLD CAMERA to look it up in TF)" if what == "camera pose" else ""
+        raise DatasetError(f"{recording.path}: name the {what} topic{hint}; candidates: {listed}")
     return candidates[0]
 
 
@@ -193,6 +197,8 @@ class Replayer:
         self.taps = list(taps or [])
         self.counts = ReplayCounts()
         self.mapping: MappingNode | None = None
+        self._previous_stamp: float | None = None
+        self._periods: deque[float] = deque(maxlen=50)
         meta = self.recording.metadata
         self.footfall = "footfall/recording" in meta
         camera = meta.get("footfall/camera", {})
@@ -309,6 +315,7 @@ class Replayer:
                     self.counts.frames_without_info += 1
                     continue
                 stamp = seconds(m.message.header.stamp)
+                self._note_gap(stamp)
                 if not self.footfall:
                     pose = self._pose_at(stamp, times, poses, tree)
                     if pose is None:
@@ -332,6 +339,18 @@ class Replayer:
         self.counts.frames_mapped = self.mapping.frames
         self.mapping.publish(last_stamp)
         return self.mapping
+
+    def _note_gap(self, stamp: float) -> None:
+        """Count depth images more than three typical periods after the one before."""
+        previous, self._previous_stamp = self._previous_stamp, stamp
+        if previous is None:
+            return
+        gap = stamp - previous
+        self._periods.append(gap)
+        typical = float(np.median(self._periods))
+        if len(self._periods) > 3 and gap > 3.0 * typical:
+            self.counts.time_gaps += 1
+        self.counts.longest_gap_s = max(self.counts.longest_gap_s, gap)
 
     def _publish_tf_pose(self, bus: InProcessBus, m: RecordedMessage, tree: TransformTree) -> None:
         """Publish a pose estimate from a footfall recording's TF message of the camera."""

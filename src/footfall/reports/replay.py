@@ -43,6 +43,8 @@ def run_replay(
         "frames": mapping.frames,
         "frames_without_pose": counts.frames_without_pose + mapping.frames_skipped_no_pose,
         "frames_without_camera_info": counts.frames_without_info,
+        "time_gaps": counts.time_gaps,
+        "longest_gap_s": counts.longest_gap_s,
         **mapping.timing(),
         "cells_known": int(snapshot.known.sum()),
         "pixels_dropped": mapping.pixels_dropped,
