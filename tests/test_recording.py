@@ -350,3 +350,34 @@ def test_replay_logs_to_rerun(tmp_path, recorded_walk):
     )
     entities = set(RrdReader(rrd).store().schema().entity_paths())
     assert {"/world/camera/depth", "/world/points", "/world/map/surface", "/map/score"} <= entities
+
+
+def test_compressed_depth_and_bad_encodings(tmp_path):
+    """image_transport's compressedDepth PNG decodes to millimetres; a colour encoding on
+    the depth topic is refused by name."""
+    import io
+
+    from PIL import Image
+
+    from footfall.recording.replay import depth_array
+
+    store = typestore()
+    mm = (np.arange(48 * 64).reshape(48, 64) % 4000 + 500).astype(np.uint16)
+    png = io.BytesIO()
+    Image.fromarray(mm).save(png, format="PNG")
+    header = store.types["std_msgs/msg/Header"](
+        stamp=store.types["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id="cam"
+    )
+    compressed = store.types["sensor_msgs/msg/CompressedImage"](
+        header=header,
+        format="16UC1; compressedDepth png",
+        data=np.frombuffer(bytes(12) + png.getvalue(), np.uint8),
+    )
+    depth, scale = depth_array(compressed)
+    np.testing.assert_array_equal(depth, mm)
+    assert scale == 0.001
+    from footfall.recording import ros_types as rt
+
+    colour = rt.image(0.0, "cam", np.zeros((4, 4, 3), np.uint8), "rgb8")
+    with pytest.raises(DatasetError, match="'rgb8' is not depth"):
+        depth_array(colour)

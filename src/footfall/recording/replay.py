@@ -39,6 +39,7 @@ from footfall.sensing.pose import Pose, exact_rotation
 
 DEPTH_ENCODINGS = {"16UC1": ("<u2", 0.001), "mono16": ("<u2", 0.001), "32FC1": ("<f4", None)}
 POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
+DEPTH_TYPES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
 
 
 @dataclass(frozen=True)
@@ -83,12 +84,46 @@ def transform_pose(transform: Any) -> Pose:
     return Pose(np.array([t.x, t.y, t.z]), exact_rotation([q.x, q.y, q.z, q.w]))
 
 
+def compressed_depth_array(image: Any) -> tuple[npt.NDArray, float | None]:
+    """A ``sensor_msgs/CompressedImage`` of depth as an array of millimetres.
+
+    ``16UC1; compressedDepth png`` (image transport's 12-byte header, then a 16-bit PNG of
+    millimetres) or a plain 16-bit PNG.
+
+    Raises:
+        DatasetError: Another format (JPEG, the inverse-depth ``32FC1`` codec), or a PNG
+            that does not decode to 16-bit depth.
+    """
+    import io
+
+    from PIL import Image
+
+    fmt = str(image.format)
+    data = bytes(np.asarray(image.data, dtype=np.uint8))
+    if "compressedDepth" in fmt:
+        if "16UC1" not in fmt:
+            raise DatasetError(f"compressed depth format {fmt!r}: only 16UC1 PNG is read")
+        data = data[12:]  # the codec's header: format and two float quantisation terms
+    elif "png" not in fmt.lower():
+        raise DatasetError(f"compressed image format {fmt!r} is not PNG depth")
+    try:
+        with Image.open(io.BytesIO(data)) as png:
+            depth = np.array(png)
+    except (OSError, ValueError, SyntaxError) as exc:
+        raise DatasetError(f"compressed depth image does not decode ({exc})") from exc
+    if depth.ndim != 2 or depth.dtype not in (np.uint16, np.int32):
+        raise DatasetError(f"compressed depth decodes to {depth.dtype} {depth.shape}, not 16-bit")
+    return depth.astype(np.uint16), 0.001
+
+
 def depth_array(image: Any) -> tuple[npt.NDArray, float | None]:
-    """A ``sensor_msgs/Image`` of depth as an array and its metres per unit.
+    """A ``sensor_msgs/Image`` (or ``CompressedImage``) of depth, and its metres per unit.
 
     Raises:
         DatasetError: An encoding that is not depth, or data of the wrong size.
     """
+    if hasattr(image, "format"):
+        return compressed_depth_array(image)
     if image.encoding not in DEPTH_ENCODINGS:
         known = ", ".join(DEPTH_ENCODINGS)
         raise DatasetError(f"depth image encoding {image.encoding!r} is not depth ({known})")
@@ -212,9 +247,7 @@ class Replayer:
         else:
             self.noise = sensor_noise(request.sensor)
             self.limits = (0.0, 10.0)
-        self.depth_topic = _pick(
-            self.recording, request.depth_topic, ("sensor_msgs/msg/Image",), "depth image"
-        )
+        self.depth_topic = _pick(self.recording, request.depth_topic, DEPTH_TYPES, "depth image")
         info = request.info_topic
         if info is None:
             beside = self.depth_topic.rsplit("/", 1)[0] + "/camera_info"
