@@ -67,9 +67,14 @@ def wait_for(bus: ZenohBus, done, seconds: float) -> bool:
 def test_a_client_in_another_process_walks_the_robot_across_the_stairs(tmp_path):
     """The robot, in its own process, starts limp; a client that only exchanges messages
     with it receives its depth images, maps and status, switches it to walking and steers
-    it: the robot crosses the staircase with no invalid foothold and no fall."""
+    it: the robot crosses the staircase with no invalid foothold and no fall. Its
+    --record file holds what came in from the network (commands, the mode) beside what it
+    sent, and replays to a map."""
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    robot = start_robot(endpoint, "stairs", tmp_path, 150.0, "--stop-at-goal")
+    record = tmp_path / "robot.mcap"
+    robot = start_robot(
+        endpoint, "stairs", tmp_path, 150.0, "--stop-at-goal", "--record", str(record)
+    )
     try:
         with ZenohBus(ZenohConfig(connect=(endpoint,))) as bus:
             seen = Observer(bus)
@@ -92,6 +97,17 @@ def test_a_client_in_another_process_walks_the_robot_across_the_stairs(tmp_path)
     assert metrics["reached_goal"], metrics
     assert metrics["invalid_footholds"] == 0 and not metrics["fell"]
     assert metrics["bridge_received"]["command"] > 100
+    from collections import Counter
+
+    from footfall.recording.reader import Recording
+
+    recording = Recording(record)
+    counts = Counter(m.topic for m in recording.messages({"/command", "/footfall/mode"}))
+    assert counts["/command"] > 100 and counts["/footfall/mode"] >= 1
+    assert "/camera/depth/image_raw" in recording.channels
+    from footfall.recording.replay import Replayer, ReplayRequest
+
+    assert Replayer(ReplayRequest(record, fast=True)).run().frames > 50
 
 
 CLIENT = textwrap.dedent(
