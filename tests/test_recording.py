@@ -359,7 +359,7 @@ def test_compressed_depth_and_bad_encodings(tmp_path):
 
     from PIL import Image
 
-    from footfall.recording.replay import depth_array
+    from footfall.recording.ros_decode import depth_array
 
     store = typestore()
     mm = (np.arange(48 * 64).reshape(48, 64) % 4000 + 500).astype(np.uint16)
