@@ -43,6 +43,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="look the camera's pose up in TF from WORLD to CAMERA (its optical frame)",
     )
     p.add_argument(
+        "--camera-height",
+        type=float,
+        default=None,
+        help="for a recording with no pose: the camera's fixed height over the floor in m",
+    )
+    p.add_argument(
+        "--camera-pitch-deg", type=float, default=None, help="how far that camera looks down"
+    )
+    p.add_argument(
+        "--camera-roll-deg", type=float, default=None, help="how far its right side dips"
+    )
+    p.add_argument(
         "--sensor",
         choices=tuple(SENSORS),
         default="kinect",
@@ -75,6 +87,9 @@ def run(args: argparse.Namespace, console: Console) -> int:
         tf_frames=tuple(args.tf_frames) if args.tf_frames else None,
         sensor=args.sensor,
         fusion=args.fusion,
+        camera_height=args.camera_height,
+        camera_pitch_deg=args.camera_pitch_deg,
+        camera_roll_deg=args.camera_roll_deg,
     )
     console.print(f"Replaying {args.file}" + ("" if args.fast else f" at {args.rate:g}x"))
     report = run_replay(request, rerun=args.rerun, rerun_spawn=args.rerun_spawn)

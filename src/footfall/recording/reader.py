@@ -89,6 +89,7 @@ class Recording:
         )
         self.metadata: dict[str, dict[str, str]] = {}
         self.channels: dict[str, str] = {}
+        self.unreadable: dict[str, str] = {}
         if self.kind == "mcap":
             self._open_mcap()
         else:
@@ -108,7 +109,11 @@ class Recording:
                     schema = summary.schemas.get(channel.schema_id)
                     if schema is None or schema.encoding != "ros2msg":
                         continue
-                    register_schema(schema.name, schema.data.decode())
+                    try:
+                        register_schema(schema.name, schema.data.decode(errors="replace"))
+                    except DatasetError as exc:  # that channel stays unread, the rest read
+                        self.unreadable[channel.topic] = str(exc)
+                        continue
                     self.channels[channel.topic] = _ros2_name(schema.name)
                 self.metadata = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
         except (McapError, ValueError, OSError, EOFError) as exc:
@@ -121,10 +126,31 @@ class Recording:
             with AnyReader([self.path], default_typestore=typestore()) as reader:
                 self.channels = {c.topic: c.msgtype for c in reader.connections}
         except Exception as exc:  # rosbags raises its own kinds per format
+            # A ROS 2 bag folder whose type definitions rosbags refuses as a whole (a hash
+            # from another ROS release, one unparsable custom type) still reads file by
+            # file: its MCAP through its own schemas, or its sqlite3 with ROS 2's types.
+            files = sorted(self.path.glob("*.mcap")) if self.path.is_dir() else []
+            if len(files) == 1:
+                self.path, self.kind = files[0], "mcap"
+                self._open_mcap()
+                return
+            if self.path.is_dir() and any(self.path.glob("*.db3")):
+                self.kind = "sqlite3"
+                self._open_sqlite3(exc)
+                return
             raise DatasetError(
                 f"{self.path}: not a readable ROS bag (a ROS 2 bag folder, a ROS 1 .bag or an "
                 f".mcap file) ({exc})"
             ) from exc
+
+    def _open_sqlite3(self, cause: Exception) -> None:
+        from rosbags.rosbag2 import Reader
+
+        try:
+            with Reader(self.path) as reader:
+                self.channels = {c.topic: c.msgtype for c in reader.connections}
+        except Exception as exc:  # rosbags raises its own kinds
+            raise DatasetError(f"{self.path}: not a readable ROS 2 bag ({cause}; {exc})") from exc
 
     def require(self, topic: str, what: str) -> str:
         """The type of ``topic``.
@@ -134,15 +160,32 @@ class Recording:
         """
         if topic not in self.channels:
             listed = ", ".join(f"{t} ({k})" for t, k in sorted(self.channels.items()))
-            raise DatasetError(f"{self.path}: no {what} topic {topic!r}; it holds {listed}")
+            unread = (
+                f"; unreadable: {', '.join(sorted(self.unreadable))}" if self.unreadable else ""
+            )
+            raise DatasetError(f"{self.path}: no {what} topic {topic!r}; it holds {listed}{unread}")
         return self.channels[topic]
 
     def messages(self, topics: set[str] | None = None) -> Iterator[RecordedMessage]:
         """The messages on ``topics`` (all by default), in log-time order."""
         if self.kind == "mcap":
             yield from self._mcap_messages(topics)
+        elif self.kind == "sqlite3":
+            yield from self._sqlite3_messages(topics)
         else:
             yield from self._rosbags_messages(topics)
+
+    def _sqlite3_messages(self, topics: set[str] | None) -> Iterator[RecordedMessage]:
+        from rosbags.rosbag2 import Reader
+
+        store = typestore()
+        with Reader(self.path) as reader:
+            connections = [c for c in reader.connections if topics is None or c.topic in topics]
+            for connection, timestamp, raw in reader.messages(connections=connections):
+                if connection.msgtype not in store.types:
+                    continue
+                message = store.deserialize_cdr(raw, connection.msgtype)
+                yield RecordedMessage(timestamp, connection.topic, connection.msgtype, message)
 
     def _mcap_messages(self, topics: set[str] | None) -> Iterator[RecordedMessage]:
         """Messages in file order (the order they were written: ties in time keep it)."""

@@ -14,6 +14,7 @@ A ROS bag's poses are read first; each depth image then takes the pose nearest i
 from __future__ import annotations
 
 import bisect
+import math
 import time
 from collections import deque
 from collections.abc import Callable
@@ -23,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from footfall.errors import DatasetError
+from footfall.errors import ConfigError, DatasetError
 from footfall.mapping.height_map import HeightMapConfig
 from footfall.messages import DepthFrame, GroundPrior, PoseEstimate
 from footfall.messages.codec import Message
@@ -57,6 +58,10 @@ class ReplayRequest:
         sensor: The depth sensor's noise model (recordings that do not carry one).
         fusion: Per-cell fusion rule; None: the recording's, else ``variance``.
         max_pose_gap_s: Largest time between a depth image and its pose [s].
+        camera_height: For a recording with no pose: the camera's fixed height over the
+            floor [m] (with ``camera_pitch_deg`` and ``camera_roll_deg``).
+        camera_pitch_deg: How far that camera looks down [deg].
+        camera_roll_deg: How far its right side dips [deg].
     """
 
     path: Path
@@ -69,6 +74,26 @@ class ReplayRequest:
     sensor: str = "kinect"
     fusion: str | None = None
     max_pose_gap_s: float = 0.05
+    camera_height: float | None = None
+    camera_pitch_deg: float | None = None
+    camera_roll_deg: float | None = None
+
+    def fixed_camera(self) -> tuple[Pose, Pose] | None:
+        """The fixed camera pose given, and the map centre 2 m ahead of it; or None."""
+        if self.camera_height is None:
+            return None
+        from footfall.pointcloud.ground import CameraOverFloor
+
+        floor = CameraOverFloor.from_angles(
+            self.camera_height,
+            math.radians(self.camera_pitch_deg or 0.0),
+            math.radians(self.camera_roll_deg or 0.0),
+        )
+        camera = Pose(np.array([0.0, 0.0, floor.height_m]), floor.rotation_camera_to_map)
+        forward = camera.rotation.apply([0.0, 0.0, 1.0])
+        forward[2] = 0.0
+        ahead = forward / max(float(np.linalg.norm(forward)), 1e-9) * 2.0
+        return camera, Pose(camera.position + ahead, camera.rotation)
 
 
 @dataclass
@@ -148,6 +173,11 @@ class Replayer:
         )
         self.tf_frames = request.tf_frames
         self.pose_topic = request.pose_topic
+        self.fixed = request.fixed_camera()
+        if self.fixed is not None:
+            if self.tf_frames is not None or self.pose_topic is not None:
+                raise ConfigError("a fixed camera pose excludes --pose-topic and --tf-frames")
+            return
         if self.footfall and self.tf_frames is None and self.pose_topic is None:
             self.tf_frames = (WORLD_FRAME, CAMERA_FRAME)
         if self.tf_frames is None and self.pose_topic is None:
@@ -240,7 +270,11 @@ class Replayer:
                     continue
                 stamp = seconds(m.message.header.stamp)
                 self._note_gap(stamp)
-                if not self.footfall:
+                if self.fixed is not None:
+                    camera, centre = self.fixed
+                    self._mapping_at(bus, (float(centre.position[0]), float(centre.position[1])))
+                    bus.publish(PoseEstimate.TOPIC, PoseEstimate(stamp, camera, centre))
+                elif not self.footfall:
                     pose = self._pose_at(stamp, times, poses, tree)
                     if pose is None:
                         self.counts.frames_without_pose += 1

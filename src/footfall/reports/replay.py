@@ -38,7 +38,9 @@ def run_replay(
     metrics: dict[str, object] = {
         "recording": str(request.path),
         "depth_topic": replayer.depth_topic,
-        "pose_source": replayer.pose_topic or "tf " + " -> ".join(replayer.tf_frames or ()),
+        "pose_source": "fixed camera"
+        if replayer.fixed is not None
+        else replayer.pose_topic or "tf " + " -> ".join(replayer.tf_frames or ()),
         "depth_images": counts.depth_images,
         "frames": mapping.frames,
         "frames_without_pose": counts.frames_without_pose + mapping.frames_skipped_no_pose,
