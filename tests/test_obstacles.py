@@ -398,3 +398,33 @@ def test_obstacles_cli_takes_the_pose_options(tmp_path):
     data = json.loads((out / "obstacles.json").read_text())
     assert data["camera"]["pitch_deg"] == pytest.approx(40, abs=1e-6)
     assert [c for c in data["clusters"] if abs(c["box"]["x"] - 1.35) < 0.15]
+
+
+def test_a_corridor_with_a_ceiling_and_people_leaves_its_middle_free():
+    """A level camera 1.2 m up in a corridor with a ceiling: the ceiling is overhead (not
+    an obstacle joining the walls into one that fills the corridor), each person standing in
+    it is one obstacle, and the floor between them stays free."""
+    rng = np.random.default_rng(17)
+
+    def box(n, lo, hi):
+        return rng.uniform(lo, hi, (n, 3))
+
+    floor = _floor(rng, (0.5, -1.2), (6, 1.2), 15000)
+    walls = np.vstack(
+        [box(8000, (0.5, -1.2, 0), (6, -1.19, 2.5)), box(8000, (0.5, 1.19, 0), (6, 1.2, 2.5))]
+    )
+    ceiling = box(10000, (0.5, -1.2, 2.5), (6, 1.2, 2.51))
+    people = []
+    for x, y in [(2.5, 0.3), (3.5, -0.5), (4.5, 0.6)]:
+        a = rng.uniform(np.pi / 2, 3 * np.pi / 2, 2000)
+        people.append(
+            np.column_stack([x + 0.2 * np.cos(a), y + 0.2 * np.sin(a), rng.uniform(0, 1.75, 2000)])
+        )
+    camera = CameraOverFloor.from_angles(1.2, np.radians(10))
+    scene = np.vstack([floor, walls, ceiling, *people])
+    in_camera = camera.rotation_camera_to_map.inv().apply(scene - [0, 0, 1.2])
+    detection = detect_obstacles(in_camera + rng.normal(0, 0.003, in_camera.shape), "camera")
+    found = [c for c in detection.clusters if 1.5 < c.height < 1.9 and c.width < 0.6]
+    assert len(found) == 3
+    for xy in [(1.5, 0.0), (3.0, 0.5), (4.0, -0.4), (5.5, 0.0)]:
+        assert not _blocked(detection, xy), xy

@@ -53,6 +53,8 @@ class DetectionConfig:
         ground_height: Height of the known ground plane in the map frame [m] (map-frame
             clouds; a camera-frame cloud's floor is z = 0 by construction).
         ground_clearance: Points at most this high above the ground count as ground [m].
+        max_obstacle_height: Points higher than this above the ground are overhead (a
+            ceiling, a lamp, a door frame's lintel) and obstruct nothing [m].
         ransac_threshold: Inlier distance of a RANSAC plane [m].
         ransac_iterations: RANSAC hypotheses per plane.
         ground_max_tilt_deg: Largest angle between the ground's normal and the expected up
@@ -75,6 +77,7 @@ class DetectionConfig:
     ground: str = "ransac"
     ground_height: float = 0.0
     ground_clearance: float = 0.05
+    max_obstacle_height: float = 2.0
     ransac_threshold: float = 0.02
     ransac_iterations: int = 200
     ground_max_tilt_deg: float | None = None
@@ -98,6 +101,11 @@ class DetectionConfig:
             raise ConfigError("cluster tolerance, cluster size and max depth must be positive")
         if not self.voxel_size >= 0:
             raise ConfigError(f"voxel size must be >= 0, got {self.voxel_size}")
+        if not self.max_obstacle_height > self.ground_clearance:
+            raise ConfigError(
+                "max obstacle height must exceed the ground clearance, got "
+                f"{self.max_obstacle_height}"
+            )
         tilt = self.ground_max_tilt_deg
         if tilt is not None and not 0 < tilt < 90:
             raise ConfigError(f"ground tilt tolerance must lie in (0, 90) degrees, got {tilt}")
@@ -344,11 +352,13 @@ def detect_obstacles(
     else:
         ground = _known_plane(p, c, 0.0)
     height = ground.heights(p)
+    below_overhead = height < c.max_obstacle_height
     if c.ground == "cones":
         keep = inverted_cone_points(p, c.cone_min_height, c.cone_max_height, c.cone_max_slope)
         floor_points = ~keep
+        keep &= below_overhead
     else:
-        keep = height > c.ground_clearance
+        keep = (height > c.ground_clearance) & below_overhead
         floor_points = np.abs(height) <= max(c.ransac_threshold, 0.5 * c.ground_clearance)
     kept = p[keep]
     grid = FreeFloorGrid.build(kept[:, :2], p[floor_points, :2], c.split_cell)

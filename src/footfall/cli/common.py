@@ -92,6 +92,12 @@ def add_cloud_options(p: argparse.ArgumentParser) -> None:
         "--voxel-size", type=float, default=0.02, help="voxel grid side in m (0: every point)"
     )
     p.add_argument(
+        "--max-obstacle-height",
+        type=float,
+        default=2.0,
+        help="points higher than this above the floor (m) are overhead: a ceiling, a lamp",
+    )
+    p.add_argument(
         "--cluster-tolerance", type=float, default=0.30, help="Euclidean clustering radius in m"
     )
     p.add_argument("--min-cluster-size", type=int, default=5, help="smallest obstacle in points")
@@ -110,6 +116,7 @@ def cloud_request(args: argparse.Namespace):
         camera_roll_deg=args.camera_roll_deg,
         ground_plane=None if args.ground_plane is None else tuple(args.ground_plane),
         voxel_size=args.voxel_size,
+        max_obstacle_height=args.max_obstacle_height,
         cluster_tolerance=args.cluster_tolerance,
         min_cluster_size=args.min_cluster_size,
     )

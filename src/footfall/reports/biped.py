@@ -28,6 +28,7 @@ class CloudRequest:
         camera_roll_deg: How far its right side dips [deg]; None when not known.
         ground_plane: The floor ``a x + b y + c z + d = 0`` in the camera frame.
         voxel_size: Voxel grid side [m].
+        max_obstacle_height: Points higher above the floor are overhead [m].
         cluster_tolerance: Euclidean clustering radius [m].
         min_cluster_size: Smallest obstacle [points].
     """
@@ -40,6 +41,7 @@ class CloudRequest:
     camera_roll_deg: float | None = None
     ground_plane: tuple[float, float, float, float] | None = None
     voxel_size: float = 0.02
+    max_obstacle_height: float = 2.0
     cluster_tolerance: float = 0.30
     min_cluster_size: int = 5
 
@@ -58,6 +60,7 @@ def detect(request: CloudRequest) -> Detection:
     config = DetectionConfig(
         ground=request.ground,
         voxel_size=request.voxel_size,
+        max_obstacle_height=request.max_obstacle_height,
         cluster_tolerance=request.cluster_tolerance,
         min_cluster_size=request.min_cluster_size,
     )
