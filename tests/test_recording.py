@@ -435,3 +435,59 @@ def test_a_bag_without_poses_replays_from_a_fixed_camera(tmp_path):
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["pose_source"] == "fixed camera" and metrics["frames"] == 1
     assert metrics["floor_valid_fraction"] >= 0.9
+
+
+def test_a_bag_tf_is_looked_up_at_each_images_time(tmp_path):
+    """A ROS 2 bag whose TF (odom -> base at 100 Hz while moving, base -> cam static) is
+    written after the images it belongs to: each image takes the transform of its own
+    stamp, so the replayed camera path is where the camera was."""
+    from rosbags.rosbag2 import Writer
+
+    from footfall.messages import DepthFrame
+    from footfall.pointcloud.ground import CameraOverFloor
+    from footfall.recording import ros_types as rt
+    from footfall.sensing.camera import PinholeCamera
+    from footfall.sensing.pose import Pose
+
+    store = typestore()
+    camera = PinholeCamera(120, 120, 79.5, 59.5, 160, 120)
+    floor = CameraOverFloor.from_angles(0.6, np.radians(40))
+    u, v = np.meshgrid(np.arange(160), np.arange(120))
+    rays = np.stack(
+        [(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], -1
+    )
+    down = floor.rotation_camera_to_map.apply(rays.reshape(-1, 3))[:, 2]
+    depth = np.where(down < -1e-6, 0.6 / -down, 0.0).reshape(120, 160).astype("<f4")
+    identity = Pose.identity().rotation
+    camera_in_base = Pose(np.array([0.0, 0.0, 0.6]), floor.rotation_camera_to_map)
+    kinds = ("tf2_msgs/msg/TFMessage", "sensor_msgs/msg/CameraInfo", "sensor_msgs/msg/Image")
+    bag = tmp_path / "moving"
+    image_times = [0.103 + 0.1 * k for k in range(5)]
+    with Writer(bag, version=9) as writer:
+        tf_c, static_c, info_c, image_c = (
+            writer.add_connection(topic, kind, typestore=store)
+            for topic, kind in zip(
+                ("/tf", "/tf_static", "/cam/depth/camera_info", "/cam/depth/image"),
+                (kinds[0], kinds[0], kinds[1], kinds[2]),
+                strict=True,
+            )
+        )
+        static = rt.tf_message([rt._transform(0.0, "base", "cam", camera_in_base)])
+        writer.write(static_c, 0, store.serialize_cdr(static, kinds[0]))
+        frame = DepthFrame(0.0, depth, camera, Pose.identity())
+        for t in image_times:  # the images first, their TF later (as a slow TF publisher does)
+            ns = round(t * 1e9)
+            writer.write(info_c, ns, store.serialize_cdr(rt.camera_info(frame), kinds[1]))
+            writer.write(
+                image_c, ns, store.serialize_cdr(rt.image(t, "cam", depth, "32FC1"), kinds[2])
+            )
+        for k in range(60):
+            t = 0.01 * k
+            base = Pose(np.array([0.5 * t, 0.0, 0.0]), identity)
+            tf = rt.tf_message([rt._transform(t, "odom", "base", base)])
+            writer.write(tf_c, round(t * 1e9) + 300_000_000, store.serialize_cdr(tf, kinds[0]))
+    replayer = Replayer(ReplayRequest(bag, fast=True, tf_frames=("odom", "cam")))
+    mapping = replayer.run()
+    path = np.array(mapping.camera_path_xy)
+    assert len(path) == 5
+    np.testing.assert_allclose(path[:, 0], [0.5 * (0.1 + 0.1 * k) for k in range(5)], atol=1e-9)

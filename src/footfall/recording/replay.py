@@ -30,7 +30,12 @@ from footfall.messages import DepthFrame, GroundPrior, PoseEstimate
 from footfall.messages.codec import Message
 from footfall.nodes.mapping import MappingNode
 from footfall.recording.reader import RecordedMessage, Recording
-from footfall.recording.ros_decode import TransformTree, depth_array, pose_of
+from footfall.recording.ros_decode import (
+    TransformHistory,
+    TransformTree,
+    depth_array,
+    pose_of,
+)
 from footfall.recording.ros_types import BODY_FRAME, CAMERA_FRAME, WORLD_FRAME, seconds
 from footfall.runtime.bus import InProcessBus
 from footfall.scoring.walkability import ScoreConfig
@@ -148,6 +153,7 @@ class Replayer:
         self.taps = list(taps or [])
         self.counts = ReplayCounts()
         self.mapping: MappingNode | None = None
+        self.history: TransformHistory | None = None
         self._previous_stamp: float | None = None
         self._periods: deque[float] = deque(maxlen=50)
         meta = self.recording.metadata
@@ -240,6 +246,10 @@ class Replayer:
         if "centre_x" in self.recording.metadata.get("footfall/mapping", {}):
             self._mapping_at(bus, (0.0, 0.0))
         times, poses = self._poses() if self.pose_topic is not None else ([], [])
+        if not self.footfall and self.tf_frames is not None and self.fixed is None:
+            self.history = TransformHistory()
+            for m in self.recording.messages({"/tf", "/tf_static"}):
+                self.history.add(m.message, static=m.topic == "/tf_static")
         tree = TransformTree()
         topics = {self.depth_topic, self.info_topic, "/tf", "/tf_static", "/ground_prior"}
         info = None
@@ -328,6 +338,8 @@ class Replayer:
         self, stamp: float, times: list[float], poses: list[Pose], tree: TransformTree
     ) -> Pose | None:
         if self.tf_frames is not None:
+            if self.history is not None:  # a bag's TF, at the image's time
+                tree = self.history.tree_at(stamp, self.request.max_pose_gap_s)
             return tree.lookup(*self.tf_frames)
         k = bisect.bisect_left(times, stamp)
         best = min((c for c in (k - 1, k) if 0 <= c < len(times)), default=None,

@@ -7,6 +7,7 @@ poses as ``geometry_msgs/Pose`` or ``Transform``, their rotations restored bit f
 
 from __future__ import annotations
 
+import bisect
 from typing import Any
 
 import numpy as np
@@ -124,3 +125,47 @@ class TransformTree:
         if root_a != root_b:
             return None
         return world_in_root.inverse().compose(frame_in_root)
+
+
+class TransformHistory:
+    """Every transform of a recording's TF, to look a frame up at an image's time.
+
+    A bag's TF often arrives after the image it belongs to, and at another rate; each
+    dynamic transform is taken at the sample nearest the image's stamp (within a gap),
+    each static one always.
+    """
+
+    def __init__(self) -> None:
+        self._samples: dict[str, list[tuple[float, str, Pose]]] = {}
+        self._static: dict[str, tuple[str, Pose]] = {}
+        self._times: dict[str, list[float]] = {}
+
+    def add(self, message: Any, static: bool = False) -> None:
+        """Take a ``tf2_msgs/TFMessage`` (from ``/tf_static`` with ``static``)."""
+        for t in message.transforms:
+            pose = transform_pose(t.transform)
+            if static:
+                self._static[t.child_frame_id] = (t.header.frame_id, pose)
+            else:
+                stamp = t.header.stamp.sec + t.header.stamp.nanosec * 1e-9
+                self._samples.setdefault(t.child_frame_id, []).append(
+                    (stamp, t.header.frame_id, pose)
+                )
+        self._times.clear()
+
+    def tree_at(self, stamp: float, max_gap_s: float) -> TransformTree:
+        """The transforms nearest ``stamp`` (dynamic ones within ``max_gap_s``)."""
+        tree = TransformTree()
+        for child, (parent, pose) in self._static.items():
+            tree.parent[child] = (parent, pose)
+        for child, samples in self._samples.items():
+            if child not in self._times:
+                samples.sort(key=lambda s: s[0])
+                self._times[child] = [s[0] for s in samples]
+            times = self._times[child]
+            k = bisect.bisect_left(times, stamp)
+            near = [c for c in (k - 1, k) if 0 <= c < len(times)]
+            best = min(near, key=lambda c: abs(times[c] - stamp))
+            if abs(times[best] - stamp) <= max_gap_s:
+                tree.parent[child] = (samples[best][1], samples[best][2])
+        return tree
