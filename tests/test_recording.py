@@ -168,6 +168,17 @@ def test_converted_mcap_replays_to_the_same_map(tmp_path):
         np.testing.assert_array_equal(replayed[layer], live[layer], err_msg=layer)
 
 
+def _flat_floor_depth(camera, floor) -> np.ndarray:
+    """Exact 32FC1 depth of a flat floor seen by ``camera`` from ``floor`` (a pose over it)."""
+    u, v = np.meshgrid(np.arange(camera.width), np.arange(camera.height))
+    rays = np.stack(
+        [(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], -1
+    )
+    down = floor.rotation_camera_to_map.apply(rays.reshape(-1, 3))[:, 2]
+    depth = np.where(down < -1e-6, floor.height_m / -down, 0.0)
+    return depth.reshape(camera.height, camera.width).astype("<f4")
+
+
 def test_a_ros1_bag_replays(tmp_path):
     """A ROS 1 bag (rosbags' writer, ROS 1 types) of a flat floor, 32FC1 depth and the
     camera's PoseStamped: replays to a flat floor at z = 0."""
@@ -182,12 +193,7 @@ def test_a_ros1_bag_replays(tmp_path):
     T = ros1.types
     camera = PinholeCamera(120, 120, 79.5, 59.5, 160, 120)
     floor = CameraOverFloor.from_angles(0.6, np.radians(40))
-    u, v = np.meshgrid(np.arange(160), np.arange(120))
-    rays = np.stack(
-        [(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], -1
-    )
-    down = floor.rotation_camera_to_map.apply(rays.reshape(-1, 3))[:, 2]
-    depth = np.where(down < -1e-6, 0.6 / -down, 0.0).reshape(120, 160).astype("<f4")
+    depth = _flat_floor_depth(camera, floor)
 
     def header(t, frame):
         stamp = T["builtin_interfaces/msg/Time"](sec=int(t), nanosec=round((t % 1) * 1e9))
@@ -452,12 +458,7 @@ def test_a_bag_tf_is_looked_up_at_each_images_time(tmp_path):
     store = typestore()
     camera = PinholeCamera(120, 120, 79.5, 59.5, 160, 120)
     floor = CameraOverFloor.from_angles(0.6, np.radians(40))
-    u, v = np.meshgrid(np.arange(160), np.arange(120))
-    rays = np.stack(
-        [(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], -1
-    )
-    down = floor.rotation_camera_to_map.apply(rays.reshape(-1, 3))[:, 2]
-    depth = np.where(down < -1e-6, 0.6 / -down, 0.0).reshape(120, 160).astype("<f4")
+    depth = _flat_floor_depth(camera, floor)
     identity = Pose.identity().rotation
     camera_in_base = Pose(np.array([0.0, 0.0, 0.6]), floor.rotation_camera_to_map)
     kinds = ("tf2_msgs/msg/TFMessage", "sensor_msgs/msg/CameraInfo", "sensor_msgs/msg/Image")
