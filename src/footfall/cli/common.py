@@ -65,21 +65,7 @@ def add_cloud_options(p: argparse.ArgumentParser) -> None:
         help="ground removal: the floor RANSAC finds near the expected up axis, a known plane "
         "(the camera's height and pitch, or --ground-plane), or Manduchi's inverted cones",
     )
-    p.add_argument(
-        "--camera-height", type=float, default=None, help="camera height above the floor in m"
-    )
-    p.add_argument(
-        "--camera-pitch-deg",
-        type=float,
-        default=None,
-        help="how far the camera looks down, in degrees (positive: down)",
-    )
-    p.add_argument(
-        "--camera-roll-deg",
-        type=float,
-        default=None,
-        help="how far the camera's right side dips, in degrees",
-    )
+    add_camera_pose_options(p, "")
     p.add_argument(
         "--ground-plane",
         type=float,
@@ -140,4 +126,53 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--rerun-spawn", action="store_true", help="open a rerun viewer on the run as it goes"
+    )
+
+
+def add_camera_pose_options(p: argparse.ArgumentParser, when: str) -> None:
+    """``--camera-height``, ``--camera-pitch-deg``, ``--camera-roll-deg``: a camera over a floor.
+
+    Args:
+        p: The parser.
+        when: When they apply, appended to the help (e.g. "for frames without a pose").
+    """
+    suffix = f" ({when})" if when else ""
+    p.add_argument(
+        "--camera-height",
+        type=float,
+        default=None,
+        help=f"camera height above the floor in m{suffix}",
+    )
+    p.add_argument(
+        "--camera-pitch-deg",
+        type=float,
+        default=None,
+        help=f"how far the camera looks down, in degrees (positive: down){suffix}",
+    )
+    p.add_argument(
+        "--camera-roll-deg",
+        type=float,
+        default=None,
+        help=f"how far the camera's right side dips, in degrees{suffix}",
+    )
+
+
+def add_depth_camera_options(p: argparse.ArgumentParser, when: str) -> None:
+    """``--intrinsics`` and ``--sensor``: a recording's depth camera and its noise model."""
+    from footfall.sensing.noise import SENSORS
+
+    suffix = f" ({when})" if when else ""
+    p.add_argument(
+        "--intrinsics",
+        type=float,
+        nargs=4,
+        metavar=("FX", "FY", "CX", "CY"),
+        default=(525.0, 525.0, 319.5, 239.5),
+        help=f"depth camera intrinsics in pixels{suffix}",
+    )
+    p.add_argument(
+        "--sensor",
+        choices=tuple(SENSORS),
+        default="kinect",
+        help=f"the depth sensor's class, for its noise model{suffix}",
     )

@@ -7,6 +7,8 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.common import add_depth_camera_options
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``convert`` and its kinds."""
@@ -34,7 +36,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "destination", type=Path, help="output folder (TUM layout), or a .mcap file"
     )
     redwood.add_argument("--fps", type=float, default=30.0, help="frame rate for the timestamps")
-    _camera_options(redwood)
+    add_depth_camera_options(redwood, "for an MCAP file")
     redwood.set_defaults(handler=run_redwood)
     tum = kinds.add_parser(
         "tum",
@@ -57,27 +59,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="the recorded world's up axis",
     )
     tum.add_argument("--depth-scale", type=float, default=1.0 / 5000.0, help="metres per unit")
-    _camera_options(tum)
+    add_depth_camera_options(tum, "")
     tum.set_defaults(handler=run_tum)
-
-
-def _camera_options(p: argparse.ArgumentParser) -> None:
-    from footfall.sensing.noise import SENSORS
-
-    p.add_argument(
-        "--intrinsics",
-        type=float,
-        nargs=4,
-        metavar=("FX", "FY", "CX", "CY"),
-        default=(525.0, 525.0, 319.5, 239.5),
-        help="depth camera intrinsics in pixels (for an MCAP file)",
-    )
-    p.add_argument(
-        "--sensor",
-        choices=tuple(SENSORS),
-        default="kinect",
-        help="the depth sensor's noise model, recorded with the camera (for an MCAP file)",
-    )
 
 
 def run_redwood(args: argparse.Namespace, console: Console) -> int:

@@ -8,6 +8,8 @@ from pathlib import Path
 from rich.console import Console
 
 from footfall.cli.common import (
+    add_camera_pose_options,
+    add_depth_camera_options,
     add_recording_options,
     format_value,
     print_table,
@@ -18,7 +20,6 @@ from footfall.cli.common import (
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``map``."""
-    from footfall.sensing.noise import SENSORS
     from footfall.sim.terrain import TERRAIN_NAMES
 
     p = subparsers.add_parser(
@@ -71,38 +72,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="map this TUM-layout sequence instead of simulating; with --camera-height, also "
         "one depth PNG or a folder of them taken from that pose",
     )
-    p.add_argument(
-        "--sensor",
-        choices=tuple(SENSORS),
-        default="kinect",
-        help="the recording's depth sensor class, for its noise model (with --tum)",
-    )
-    p.add_argument(
-        "--camera-height",
-        type=float,
-        default=None,
-        help="camera height over the floor in m, for frames without a trajectory (with --tum)",
-    )
-    p.add_argument(
-        "--camera-pitch-deg",
-        type=float,
-        default=None,
-        help="how far that camera looks down, in degrees",
-    )
-    p.add_argument(
-        "--camera-roll-deg",
-        type=float,
-        default=None,
-        help="how far that camera's right side dips, in degrees",
-    )
-    p.add_argument(
-        "--intrinsics",
-        type=float,
-        nargs=4,
-        metavar=("FX", "FY", "CX", "CY"),
-        default=(525.0, 525.0, 319.5, 239.5),
-        help="depth camera intrinsics in pixels (with --tum)",
-    )
+    add_depth_camera_options(p, "with --tum")
+    add_camera_pose_options(p, "with --tum, for frames without a trajectory")
     p.add_argument(
         "--up",
         type=float,

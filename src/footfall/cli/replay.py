@@ -7,7 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from footfall.cli.common import format_value, print_table, wrote
+from footfall.cli.common import add_camera_pose_options, format_value, print_table, wrote
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -42,18 +42,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="look the camera's pose up in TF from WORLD to CAMERA (its optical frame)",
     )
-    p.add_argument(
-        "--camera-height",
-        type=float,
-        default=None,
-        help="for a recording with no pose: the camera's fixed height over the floor in m",
-    )
-    p.add_argument(
-        "--camera-pitch-deg", type=float, default=None, help="how far that camera looks down"
-    )
-    p.add_argument(
-        "--camera-roll-deg", type=float, default=None, help="how far its right side dips"
-    )
+    add_camera_pose_options(p, "a fixed camera, for a recording with no pose")
     p.add_argument(
         "--sensor",
         choices=tuple(SENSORS),
