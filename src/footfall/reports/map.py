@@ -230,8 +230,6 @@ def _map_recording(
     """Map a recorded sequence, or frames from a given camera pose."""
     import math
 
-    from scipy.spatial.transform import Rotation
-
     from footfall.datasets.tum import load_depth_png, map_tum_sequence, read_fixed_view
     from footfall.pointcloud.ground import CameraOverFloor
     from footfall.sensing.camera import PinholeCamera
@@ -251,7 +249,7 @@ def _map_recording(
         pose = Pose(np.array([0.0, 0.0, floor.height_m]), floor.rotation_camera_to_map)
         first = read_fixed_view(request.tum, pose)[0].depth_path
     else:
-        first = read_fixed_view(request.tum, Pose(np.zeros(3), Rotation.identity()))[0].depth_path
+        first = read_fixed_view(request.tum, Pose.identity())[0].depth_path
         if request.tum.is_file() or not (request.tum / "groundtruth.txt").is_file():
             raise DatasetError(
                 f"{request.tum} has no trajectory (groundtruth.txt): give the camera's pose "
