@@ -11,13 +11,15 @@ A :class:`WalkRecorder` keeps the per-tick record for metrics and plots.
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 import numpy.typing as npt
 
 from footfall.backends import HexapodBackend
+from footfall.errors import ConfigError
 from footfall.messages import (
     EffectorTargets,
     GaitStatus,
@@ -35,7 +37,9 @@ from footfall.runtime.scheduler import SimulatedScheduler
 
 @dataclass
 class WalkLog:
-    """Per-tick record of a walk. Each list grows by one entry per control tick.
+    """Per-tick record of a walk: each list grows by one entry per control tick.
+
+    :meth:`ring` makes a log that keeps only the latest rows.
 
     Attributes:
         time: Controller time [s].
@@ -68,6 +72,13 @@ class WalkLog:
     reference_body_z: list[float] = field(default_factory=list)
     state: list[str] = field(default_factory=list)
 
+    @classmethod
+    def ring(cls, max_ticks: int) -> WalkLog:
+        """A log that keeps only the latest ``max_ticks`` rows (a long run's bounded memory)."""
+        if max_ticks < 1:
+            raise ConfigError(f"a walk log keeps at least one tick, got {max_ticks}")
+        return cls(**{f.name: deque(maxlen=max_ticks) for f in fields(cls)})
+
     def array(self, name: str) -> npt.NDArray:
         """One field as a NumPy array with time along the first axis."""
         return np.asarray(getattr(self, name))
@@ -78,10 +89,11 @@ class WalkRecorder:
 
     Args:
         bus: The bus.
+        max_ticks: Keep only the latest this many rows; None keeps every row.
     """
 
-    def __init__(self, bus: Bus) -> None:
-        self.log = WalkLog()
+    def __init__(self, bus: Bus, max_ticks: int | None = None) -> None:
+        self.log = WalkLog() if max_ticks is None else WalkLog.ring(max_ticks)
         self._state: RobotState | None = None
         self._targets: EffectorTargets | None = None
         self._status: GaitStatus | None = None
@@ -164,9 +176,13 @@ class WalkingGraph:
         backend: HexapodBackend,
         controller: WalkController,
         command_timeout: float | None = None,
+        log_ticks: int | None = None,
     ) -> WalkingGraph:
-        """Wire the movement and servo nodes and a recorder on ``bus``."""
-        recorder = WalkRecorder(bus)
+        """Wire the movement and servo nodes and a recorder on ``bus``.
+
+        The recorder keeps the latest ``log_ticks`` rows, or every row when None.
+        """
+        recorder = WalkRecorder(bus, log_ticks)
         movement = MovementNode(bus, controller, command_timeout=command_timeout)
         servo = ServoNode(bus, controller.spec, backend)
         servo.publish_state()

@@ -15,7 +15,7 @@ from footfall.control_loop import WalkLog
 from footfall.metrics import GroundHeight, flat_ground
 
 
-def _save(fig, path: Path) -> Path:
+def save_figure(fig, path: Path) -> Path:
     """Write a figure as a PNG (creating its folder) and release it."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
@@ -95,7 +95,7 @@ def plot_walk(
     ax.grid(alpha=0.3)
     if title:
         fig.suptitle(title)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _map_axes(
@@ -180,7 +180,7 @@ def plot_height_map(
     fig.colorbar(image, ax=ax, label="height [m]", shrink=0.8)
     _draw_path(ax, path_xy, path_label)
     ax.set_title(f"{title} (grey: unknown)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_score_map(
@@ -217,7 +217,7 @@ def plot_score_map(
     _invalid_overlay(ax, score, valid, extent, 0.45)
     _draw_path(ax, path_xy, path_label)
     ax.set_title(f"{title} (red: invalid, grey: unknown)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_footholds(
@@ -261,7 +261,7 @@ def plot_footholds(
         ax.plot(path_xy[:, 0], path_xy[:, 1], color="cyan", lw=1.2, label="body path")
     ax.legend(loc="upper right", fontsize=8)
     ax.set_title(f"{title} (score: dark is walkable, red invalid, grey unknown)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
@@ -294,7 +294,7 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
         f"{bench['seeds']} seeds: planned {bench['planned_success_rate']:.0%}, "
         f"blind {bench['blind_success_rate']:.0%} (success: goal, no fall, no invalid foothold)"
     )
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_plan(plan, path: Path, title: str = "") -> Path:
@@ -360,7 +360,7 @@ def plot_plan(plan, path: Path, title: str = "") -> Path:
         title
         or f"{m.name}: {len(plan.footsteps.positions)} footsteps, planned in {plan.plan_ms:.1f} ms"
     )
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_obstacles(detection, path: Path) -> Path:
@@ -392,4 +392,4 @@ def plot_obstacles(detection, path: Path) -> Path:
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8, markerscale=10)
     ax.set_title("obstacles seen from above")
-    return _save(fig, path)
+    return save_figure(fig, path)

@@ -21,7 +21,14 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.biped.lipm import WalkParameter
-from footfall.errors import ConfigError
+from footfall.errors import ConfigError, PlanningError
+
+# The shortest step limit and the smallest turn a step may be limited to [m], [rad]: below
+# them a plan would take millions of steps.
+MIN_STEP_LENGTH = 0.005
+MIN_TURN = math.radians(0.5)
+# The most steps a plan may take.
+MAX_STEPS = 100_000
 
 
 @dataclass(frozen=True)
@@ -39,8 +46,19 @@ class StepLimits:
     max_turn: float = math.radians(30.0)
 
     def __post_init__(self) -> None:
-        if not (self.max_length > 0 and self.width > 0 and self.max_turn > 0):
-            raise ConfigError("step length, width and turn limits must be positive")
+        values = (self.max_length, self.width, self.max_turn)
+        if not all(math.isfinite(v) for v in values):
+            raise ConfigError(f"step limits must be finite numbers, got {values}")
+        if not (MIN_STEP_LENGTH <= self.max_length and self.width > 0):
+            raise ConfigError(
+                f"step max_length must be at least {MIN_STEP_LENGTH} m and width positive, "
+                f"got {self.max_length}, {self.width}"
+            )
+        if not MIN_TURN <= self.max_turn <= math.pi:
+            raise ConfigError(
+                f"step max_turn must lie in [{math.degrees(MIN_TURN):g}, 180] degrees, "
+                f"got {math.degrees(self.max_turn):g}"
+            )
 
 
 def _wrap(angle: float) -> float:
@@ -61,6 +79,15 @@ def walk_parameters(
         One parameter per support phase: the first support, the steps, the closing step.
     """
     points = np.asarray(waypoints, dtype=np.float64)
+    if not np.all(np.isfinite(points)) or not math.isfinite(initial_heading):
+        raise PlanningError("waypoints and the initial heading must be finite numbers")
+    length = float(np.sum(np.hypot(*np.diff(points, axis=0).T))) if len(points) > 1 else 0.0
+    turns_budget = (len(points) + 1) * math.ceil(math.pi / limits.max_turn)
+    if length / limits.max_length + 2 * turns_budget > MAX_STEPS:
+        raise PlanningError(
+            f"a path of {length:.3g} m with {len(points)} waypoints needs more than "
+            f"{MAX_STEPS} steps of at most {limits.max_length} m"
+        )
     heading = initial_heading
     params = [WalkParameter(0.0, limits.width, heading)]
     for a, b in itertools.pairwise(points):

@@ -36,6 +36,8 @@ from footfall.errors import ConfigError
 TEST_CASE_RADIUS = 0.2  # [m]
 FOOT_LENGTH = 0.12  # sole length [m]
 DEFAULT_HIP_WIDTH = 0.2  # [m]
+# A box longer than this many times its width is refused (as many circles would cover it).
+MAX_BOX_CIRCLES = 1000
 
 
 def box_circles(
@@ -53,9 +55,18 @@ def box_circles(
         depth: Extent along its y axis [m].
         yaw: Heading of the box's x axis [rad].
     """
-    if not (width > 0 and depth > 0):
-        raise ConfigError(f"a box needs positive width and depth, got {width}, {depth}")
+    if not all(math.isfinite(v) for v in (width, depth, yaw)) or not (width > 0 and depth > 0):
+        raise ConfigError(
+            f"a box needs finite positive width and depth and a finite yaw, got "
+            f"{width}, {depth}, {yaw}"
+        )
     c = np.asarray(centre, dtype=np.float64)
+    if c.shape != (2,) or not np.all(np.isfinite(c)):
+        raise ConfigError(f"a box centre must be two finite numbers, got {centre!r}")
+    if max(width, depth) / min(width, depth) > MAX_BOX_CIRCLES:
+        raise ConfigError(
+            f"a {width} m x {depth} m box would take more than {MAX_BOX_CIRCLES} circles"
+        )
     long_side, short_side = max(width, depth), min(width, depth)
     axis_angle = yaw if width >= depth else yaw + math.pi / 2
     axis = np.array([math.cos(axis_angle), math.sin(axis_angle)])
@@ -89,9 +100,14 @@ class PlanMap:
     limits: StepLimits = field(default_factory=StepLimits)
 
     def __post_init__(self) -> None:
-        if not self.hip_width > 0:
-            raise ConfigError(f"hip_width must be positive, got {self.hip_width}")
+        if not (math.isfinite(self.hip_width) and self.hip_width > 0):
+            raise ConfigError(f"hip_width must be a positive number, got {self.hip_width}")
+        for what, point in (("start", self.start), ("goal", self.goal)):
+            if not all(math.isfinite(v) for v in point):
+                raise ConfigError(f"map {what} must be finite coordinates, got {point}")
         for c in self.obstacles:
+            if not all(math.isfinite(v) for v in (c.x, c.y, c.r)):
+                raise ConfigError(f"obstacle ({c.x}, {c.y}, r={c.r}) holds a non-finite number")
             if not c.r > 0:
                 raise ConfigError(f"obstacle at ({c.x}, {c.y}) has a non-positive radius {c.r}")
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 from rich.console import Console
@@ -55,6 +56,61 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "--out", type=Path, default=Path("footfall-out/bench-terrain"), help="output folder"
     )
     terrain.set_defaults(handler=run_terrain)
+    faults = kinds.add_parser(
+        "faults",
+        help="walking through injected sensor and timing faults",
+        description=(
+            "Walk stairs, cobblestones and the course (planned, with the camera) with each "
+            "fault class injected between the nodes (see footfall walk --faults), --seeds runs "
+            "each, and survey the map's height error under SLAM noise without and with drift "
+            "compensation; writes bench.json and bench.png to --out. Success = reached the "
+            "goal, no fall, zero invalid footholds."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    faults.add_argument("--seeds", type=int, default=5, help="runs per fault class and terrain")
+    faults.add_argument("--seconds", type=float, default=90.0, help="longest walk in seconds")
+    faults.add_argument(
+        "--faults",
+        action="append",
+        metavar="SPEC",
+        help="walk this fault mix instead of the built-in classes (repeatable; as walk --faults)",
+    )
+    faults.add_argument(
+        "--terrains",
+        nargs="+",
+        default=None,
+        metavar="TERRAIN",
+        help="terrains to walk (default: stairs cobblestones course)",
+    )
+    faults.add_argument(
+        "--jobs",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="walks simulated at once, one process each",
+    )
+    faults.add_argument(
+        "--out", type=Path, default=Path("footfall-out/bench-faults"), help="output folder"
+    )
+    faults.set_defaults(handler=run_faults)
+    soak = kinds.add_parser(
+        "soak",
+        help="a long run: memory and per-frame time over laps of a terrain",
+        description=(
+            "Walk laps of a terrain (planned, with the camera) for --minutes of wall time, "
+            "sampling resident memory, per-frame mapping time, per-tick control time and live "
+            "objects; writes soak.json (samples, slopes per minute, growth from the first to "
+            "the last ten minutes) and soak.png to --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    soak.add_argument("--minutes", type=float, default=60.0, help="wall-clock minutes to walk")
+    soak.add_argument("--terrain", default="cobblestones", help="terrain to walk laps of")
+    soak.add_argument("--sample-seconds", type=float, default=10.0, help="seconds between samples")
+    soak.add_argument(
+        "--out", type=Path, default=Path("footfall-out/bench-soak"), help="output folder"
+    )
+    soak.set_defaults(handler=run_soak)
 
 
 def run_mapping(args: argparse.Namespace, console: Console) -> int:
@@ -122,3 +178,103 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
     console.print(f"planned success {planned:.0%}, blind {blind:.0%}")
     wrote(console, paths)
     return 0
+
+
+def run_faults(args: argparse.Namespace, console: Console) -> int:
+    """Walk every fault class and print the results table."""
+    from footfall.reliability.faults_bench import (
+        FAULT_CLASSES,
+        FAULT_TERRAINS,
+        fault_benchmark_runs,
+        parse_fault_classes,
+    )
+    from footfall.reports.bench import run_faults_bench
+
+    faults = parse_fault_classes(args.faults) if args.faults else FAULT_CLASSES
+    terrains = tuple(args.terrains) if args.terrains else FAULT_TERRAINS
+    with Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total} runs"),
+        TimeRemainingColumn(),
+        console=console,
+    ) as progress:
+        task = progress.add_task(
+            "walking", total=fault_benchmark_runs(max(args.seeds, 0), faults, terrains)
+        )
+        report = run_faults_bench(
+            args.seeds,
+            args.seconds,
+            faults=faults,
+            terrains=terrains,
+            jobs=args.jobs,
+            on_run=lambda label: progress.update(task, advance=1, description=label),
+        )
+    paths = report.write(args.out)
+    bench = report.to_json()
+    table = Table(title=f"fault benchmark, {args.seeds} seeds")
+    for column in ("fault", "terrain", "success", "falls", "invalid", "frozen", "recovered"):
+        table.add_column(column)
+    for r in bench["results"]:
+        table.add_row(
+            r["fault"],
+            r["terrain"],
+            f"{r['successes']}/{r['runs']}",
+            str(r["falls"]),
+            str(r["invalid_footholds"]),
+            str(r["frozen"]),
+            str(r["recovered"]),
+        )
+    console.print(table)
+    rmse = bench["map_rmse"]
+    console.print(
+        f"success {bench['success_rate']:.0%}, falls {bench['falls']}, invalid footholds "
+        f"{bench['invalid_footholds']}; map RMSE under SLAM noise "
+        f"{1e3 * rmse['without_compensation_m']:.1f} mm without drift compensation, "
+        f"{1e3 * rmse['with_compensation_m']:.1f} mm with"
+    )
+    wrote(console, paths)
+    return 0
+
+
+def run_soak(args: argparse.Namespace, console: Console) -> int:
+    """Walk laps for the given time and print the trends."""
+    from footfall.reliability.soak import QUANTITIES
+    from footfall.reports.bench import run_soak_bench
+
+    with Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TimeRemainingColumn(),
+        console=console,
+    ) as progress:
+        task = progress.add_task("soaking", total=args.minutes)
+        report = run_soak_bench(
+            args.minutes,
+            terrain=args.terrain,
+            sample_seconds=args.sample_seconds,
+            on_sample=lambda s: progress.update(
+                task,
+                completed=s["wall_minutes"],
+                description=f"lap {s['laps']}, {s['rss_mb']:.0f} MiB",
+            ),
+        )
+    paths = report.write(args.out)
+    figures = report.to_json()
+    if figures.get("ended_early"):
+        console.print(f"[red]The soak ended early:[/] {figures['ended_early']}")
+    if "growth" in figures:
+        table = Table(title=f"soak, {args.minutes:g} min, {figures['laps']} laps")
+        for column in ("quantity", "first window", "last window", "growth", "slope / min"):
+            table.add_column(column)
+        for name in QUANTITIES:
+            table.add_row(
+                name,
+                f"{figures['first_window_mean'][name]:.4g}",
+                f"{figures['last_window_mean'][name]:.4g}",
+                f"{figures['growth'][name]:+.2%}",
+                f"{figures['slope_per_minute'][name]:+.3g}",
+            )
+        console.print(table)
+    wrote(console, paths)
+    return 0 if not figures.get("ended_early") else 1

@@ -118,6 +118,20 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         action="store_true",
         help="pace the control loop to the wall clock, as on a real robot (overruns counted)",
     )
+    p.add_argument(
+        "--faults",
+        default="",
+        metavar="SPEC",
+        help=(
+            "inject faults between the nodes, comma-separated name=value items: drop=0.3 "
+            "(fraction of depth frames lost), delay=0.2 (seconds every frame arrives late), "
+            "repeat=0.1 (fraction of frames repeating the previous image), nan=0.05 (fraction "
+            "of each image covered by NaN and zero patches), drift=slam (SLAM-like pose drift "
+            "and jitter), jump=0.1:5@8 (the pose jumps 0.1 m and 5 degrees at t = 8 s; "
+            "repeatable), pose_loss=1.0@10 (no pose for 1 s from t = 10 s), overrun=0.05 "
+            "(fraction of control ticks running late by one to three periods)"
+        ),
+    )
     add_recording_options(p)
     p.add_argument("--out", type=Path, default=Path("footfall-out/walk"), help="output folder")
     p.set_defaults(handler=run)
@@ -147,6 +161,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
             record=args.record,
             rerun=args.rerun,
             rerun_spawn=args.rerun_spawn,
+            faults=args.faults,
         )
     )
     mode = "blind (thesis baseline)" if args.blind else "with camera, map and foothold planning"

@@ -23,13 +23,18 @@ Each cell also keeps the largest height range of its points within one frame bey
 the camera's noise explains (``noise_spread_sigmas`` standard deviations): a cell that
 straddles an edge shows it, a noisy flat floor does not.
 
+With drift compensation on (``HeightMapConfig.drift``), each frame is first registered in
+height against the map (:mod:`footfall.mapping.drift`). The buffer, its window arithmetic
+and the integration that writes it are one module: they share the buffer's layout.
+
 Invalid readings (no return, NaN, out of range) never touch the map; neither do points
 outside the window, which are counted.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 
 import numpy as np
@@ -37,6 +42,7 @@ import numpy.typing as npt
 
 from footfall.errors import ConfigError
 from footfall.mapping import kernels
+from footfall.mapping.drift import DriftCompensator, DriftConfig, Registration, frame_offset
 from footfall.sensing.camera import DepthStats, PinholeCamera
 from footfall.sensing.noise import IDEAL, DepthNoiseModel
 from footfall.sensing.pose import Pose
@@ -57,6 +63,10 @@ _RULE_CODES = {
 }
 
 
+# The largest world coordinate a map window may be centred on [m] (cell indices stay exact).
+MAX_COORDINATE = 1e7
+
+
 @dataclass(frozen=True)
 class HeightMapConfig:
     """Height map settings.
@@ -71,6 +81,8 @@ class HeightMapConfig:
         gate: Innovation gate of the ``variance`` rule [standard deviations].
         noise_spread_sigmas: In-frame height range of a cell the camera's noise alone
             explains [standard deviations of the noise at the cell's range].
+        drift: Vertical drift compensation of each frame against the map (off by default;
+            see :mod:`footfall.mapping.drift`).
     """
 
     size: int = 256
@@ -80,13 +92,18 @@ class HeightMapConfig:
     process_noise: float = 0.002
     gate: float = 4.0
     noise_spread_sigmas: float = 6.0
+    drift: DriftConfig = field(default_factory=DriftConfig)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "fusion", FusionRule(self.fusion))
         if self.size < 8:
             raise ConfigError(f"height map size must be >= 8 cells, got {self.size}")
-        if not self.resolution > 0:
+        if not (math.isfinite(self.resolution) and self.resolution > 0):
             raise ConfigError(f"height map resolution must be positive, got {self.resolution}")
+        for name in ("range_noise", "process_noise", "gate", "noise_spread_sigmas"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ConfigError(f"height map {name} must be a number >= 0, got {value}")
 
     @property
     def extent(self) -> float:
@@ -102,11 +119,18 @@ class IntegrationStats:
         depth: Pixel counts (valid, zero, non-finite, negative, out of range).
         outside: Valid readings that fell outside the map window.
         cells_updated: Map cells the frame wrote.
+        vertical_offset_m: The frame's height above the map where they overlap, taken out
+            before fusion (drift compensation) [m]; NaN when not estimated.
+        inconsistent: The frame was not fused: its offset jumped, beyond drift.
+        settled: The offset moved to a new level that several frames agree on.
     """
 
     depth: DepthStats
     outside: int
     cells_updated: int
+    vertical_offset_m: float = math.nan
+    inconsistent: bool = False
+    settled: bool = False
 
 
 @dataclass(frozen=True)
@@ -180,10 +204,17 @@ class HeightMap:
         self._touched = np.zeros(n * n, dtype=np.int64)
         self._frame_id = 0
         self.origin = self._origin_for(centre)
+        self.drift = DriftCompensator(self.config.drift)
 
     # Geometry -------------------------------------------------------------------------
     def _origin_for(self, centre: tuple[float, float]) -> npt.NDArray[np.int64]:
-        cell = np.floor(np.asarray(centre, dtype=np.float64) * self._inv_res).astype(np.int64)
+        c = np.asarray(centre, dtype=np.float64)
+        if c.shape != (2,) or not np.all(np.isfinite(c)) or np.any(np.abs(c) > MAX_COORDINATE):
+            raise ConfigError(
+                f"a map centre must be two finite coordinates within {MAX_COORDINATE:g} m, "
+                f"got {centre!r}"
+            )
+        cell = np.floor(c * self._inv_res).astype(np.int64)
         return cell - self.config.size // 2
 
     def cell_of(self, xy: npt.ArrayLike) -> npt.NDArray[np.int64]:
@@ -324,8 +355,43 @@ class HeightMap:
             self._touched,
             counts,
         )
+        registration = None
+        if self.config.drift.enabled:
+            registration = self._register(n_touched, camera.noise.is_ideal)
+            if not registration.consistent:
+                return replace(
+                    self._stats(counts, 0),
+                    vertical_offset_m=registration.measured_m,
+                    inconsistent=True,
+                )
         self._fuse(n_touched, camera.noise)
-        return self._stats(counts, n_touched)
+        stats = self._stats(counts, n_touched)
+        if registration is None:
+            return stats
+        return replace(stats, vertical_offset_m=registration.offset_m, settled=registration.settled)
+
+    def _register(self, n_touched: int, ideal: bool) -> Registration:
+        """Measure the frame's vertical offset against the map and take it out of the frame."""
+        n = self.config.size
+        idx = self._touched[:n_touched]
+        i, j = idx // n, idx % n
+        z = self._frame_h[i, j] if ideal else self._frame_sum[i, j] / self._frame_n[i, j]
+        seen = self.known[i, j]
+        frame_range = (self._frame_h[i, j] - self._frame_lo[i, j]) if ideal else np.zeros(len(z))
+        measured = frame_offset(
+            z[seen],
+            frame_range[seen],
+            self.heights[i[seen], j[seen]],
+            self.spread[i[seen], j[seen]],
+            self.config.drift,
+        )
+        registration = self.drift.judge(measured)
+        if registration.consistent and registration.offset_m != 0.0:
+            offset = registration.offset_m
+            self._frame_h[i, j] -= offset
+            self._frame_lo[i, j] -= offset
+            self._frame_sum[i, j] -= offset * self._frame_n[i, j]
+        return registration
 
     def integrate_points(
         self, points_in_world: npt.ArrayLike, sensor_position: npt.ArrayLike

@@ -17,6 +17,7 @@ foothold) holds the last targets, all feet down, and says why.
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import numpy as np
 import numpy.typing as npt
@@ -96,9 +97,9 @@ class WalkController:
         self.swings: dict[int, SwingTrajectory] = {}
         self.floor = 0.0  # ground height the body keeps its commanded height above [m]
         self.footholds_adjusted = 0
-        self.touchdowns: list[Touchdown] = []
-        # Hold still: finish the step under way, then take no new one (a lost link).
-        self.holding = False
+        self.touchdowns: deque[Touchdown] = deque()  # a long run bounds it (maxlen)
+        self.touchdown_count = 0
+        self.holding = False  # hold still: finish the step under way, take no new one
         self._time: float | None = None
         self._velocity_scale = 1.0
         self._step_speed_scale = 1.0  # the fraction of the command this step plans for
@@ -291,6 +292,7 @@ class WalkController:
             self.solver.touched_down(leg)
             record = Touchdown(t, leg, plan.nominal[leg].copy(), swing.target)
             self.touchdowns.append(record)
+            self.touchdown_count += 1
             moved = (record.chosen_in_world - record.nominal_in_world)[:2]
             self.footholds_adjusted += bool(np.hypot(*moved) > 1e-3)
         self.swings = {}

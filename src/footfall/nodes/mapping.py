@@ -9,6 +9,7 @@ simulated walk and the replay of a recorded sequence build their maps here.
 
 from __future__ import annotations
 
+import math
 import statistics
 import time
 from collections import deque
@@ -24,6 +25,14 @@ from footfall.scoring.walkability import ScoreConfig, ScoreMap, score_map
 POSE_TOLERANCE_S = 0.02
 # Depth frames held while their pose has not arrived.
 MAX_PENDING_FRAMES = 4
+# Pose estimates held for frames that arrive late (a few seconds at a camera's rate).
+POSE_HISTORY = 64
+# Per-frame times kept for the timing figures, and camera positions kept for the path.
+TIMING_HISTORY = 10_000
+PATH_HISTORY = 20_000
+# A camera that moved this much and sends the very same image is frozen [m], [rad].
+REPEAT_MOTION_M = 0.002
+REPEAT_TURN_RAD = 0.002
 
 
 def map_update(stamp: float, sequence: int, snapshot: MapSnapshot, scores: ScoreMap) -> MapUpdate:
@@ -77,6 +86,9 @@ class MappingNode:
             :meth:`publish`.
         centre: World ``(x, y)`` the map starts centred on [m].
         stride: Use every ``stride``-th pixel row and column of the depth images.
+        reject_repeats: Set aside a frame that repeats the previous image bit for bit
+            although the camera moved (a frozen camera); a robot's own camera does, a
+            replay of synthetic images need not.
     """
 
     name = "mapping"
@@ -89,8 +101,10 @@ class MappingNode:
         publish_every_frame: bool = True,
         centre: tuple[float, float] = (0.0, 0.0),
         stride: int = 1,
+        reject_repeats: bool = False,
     ) -> None:
         self.bus = bus
+        self.reject_repeats = reject_repeats
         self.score_config = score_config or ScoreConfig()
         self.height_map = HeightMap(map_config, centre=centre)
         self.initial_centre = (float(centre[0]), float(centre[1]))
@@ -100,22 +114,41 @@ class MappingNode:
         self.sequence = 0
         self.frames = 0
         self.frames_skipped_no_pose = 0
+        self.frames_repeated = 0
+        self.frames_inconsistent = 0
         self.pixels_dropped = 0
         self.points_outside = 0
-        self.update_ms: list[float] = []
-        self.camera_path_xy: list[tuple[float, float]] = []
-        self._pose: PoseEstimate | None = None
+        self.largest_offset_m = 0.0
+        self.update_ms: deque[float] = deque(maxlen=TIMING_HISTORY)
+        self.camera_path_xy: deque[tuple[float, float]] = deque(maxlen=PATH_HISTORY)
+        self._poses: deque[PoseEstimate] = deque(maxlen=POSE_HISTORY)
         self._pending: deque[DepthFrame] = deque()
+        self._previous: tuple[DepthFrame, PoseEstimate] | None = None
         bus.subscribe(PoseEstimate.TOPIC, self._on_pose)
         bus.subscribe(DepthFrame.TOPIC, self._on_depth)
         bus.subscribe(GroundPrior.TOPIC, self._on_ground_prior)
 
+    def _pose_at(self, stamp: float) -> PoseEstimate | None:
+        """The held pose estimate of time ``stamp``, if one is within the tolerance."""
+        best = None
+        for pose in reversed(self._poses):
+            if abs(pose.stamp - stamp) <= POSE_TOLERANCE_S and (
+                best is None or abs(pose.stamp - stamp) < abs(best.stamp - stamp)
+            ):
+                best = pose
+            if pose.stamp < stamp - POSE_TOLERANCE_S:
+                break
+        return best
+
     def _on_pose(self, message: PoseEstimate) -> None:
-        self._pose = message
+        if self._poses and message.stamp < self._poses[-1].stamp:
+            self._poses.clear()  # time went back (a replay restarted): the history is void
+        self._poses.append(message)
         while self._pending:
             frame = self._pending.popleft()
-            if abs(message.stamp - frame.stamp) <= POSE_TOLERANCE_S:
-                self._integrate(frame, message)
+            pose = self._pose_at(frame.stamp)
+            if pose is not None:
+                self._integrate(frame, pose)
             elif frame.stamp > message.stamp:
                 self._pending.appendleft(frame)  # its pose is still to come
                 break
@@ -137,26 +170,52 @@ class MappingNode:
         points = np.column_stack([xy, np.full(len(xy), prior.ground_z)])
         self.height_map.integrate_points(points, body)
 
-    def _skip(self, frame: DepthFrame, why: str) -> None:
-        self.frames_skipped_no_pose += 1
+    def _skip(self, frame: DepthFrame, why: str, count: bool = True) -> None:
+        if count:
+            self.frames_skipped_no_pose += 1
         self.bus.publish(
             LogLine.TOPIC,
             LogLine(frame.stamp, self.name, "warning", f"depth frame {frame.sequence}: {why}"),
         )
 
     def _on_depth(self, frame: DepthFrame) -> None:
-        pose = self._pose
-        if pose is not None and abs(pose.stamp - frame.stamp) <= POSE_TOLERANCE_S:
+        pose = self._pose_at(frame.stamp)
+        if pose is not None:
             self._integrate(frame, pose)
             return
-        if pose is not None and pose.stamp > frame.stamp:
-            self._skip(frame, "older than the latest pose estimate")
+        if self._poses and self._poses[-1].stamp > frame.stamp:
+            self._skip(frame, "no pose estimate of its time (older than the latest estimate)")
             return
         self._pending.append(frame)  # wait for its pose
         if len(self._pending) > MAX_PENDING_FRAMES:
             self._skip(self._pending.popleft(), "no pose estimate arrived for it")
 
+    def _repeats_previous(self, frame: DepthFrame, pose: PoseEstimate) -> bool:
+        """Whether ``frame`` carries the previous image although the camera moved.
+
+        A real sensor's noise never repeats an image; a simulated one does when nothing
+        moves, and then the repeat is harmless. A camera that moved and still sends the
+        same image is frozen: its image belongs to another pose.
+        """
+        if self._previous is None or not self.reject_repeats:
+            return False
+        last_frame, last_pose = self._previous
+        a, b = last_pose.camera_in_world, pose.camera_in_world
+        moved = float(np.linalg.norm(a.position - b.position)) > REPEAT_MOTION_M or (
+            (a.rotation.inv() * b.rotation).magnitude() > REPEAT_TURN_RAD
+        )
+        return (
+            moved
+            and last_frame.depth.shape == frame.depth.shape
+            and np.array_equal(last_frame.depth, frame.depth, equal_nan=True)
+        )
+
     def _integrate(self, frame: DepthFrame, pose: PoseEstimate) -> None:
+        if self._repeats_previous(frame, pose):
+            self.frames_repeated += 1
+            self._skip(frame, "repeats the previous image although the camera moved", count=False)
+            return
+        self._previous = (frame, pose)
         t0 = time.perf_counter()
         body = pose.body_in_world.position
         self.height_map.recentre((float(body[0]), float(body[1])))
@@ -167,6 +226,21 @@ class MappingNode:
             depth_scale=frame.depth_scale,
             stride=self.stride,
         )
+        if stats.inconsistent:
+            self.frames_inconsistent += 1
+            self.bus.publish(
+                LogLine.TOPIC,
+                LogLine(
+                    frame.stamp,
+                    self.name,
+                    "warning",
+                    f"depth frame {frame.sequence}: {stats.vertical_offset_m:+.3f} m off the "
+                    "map where they overlap; not fused (its pose is inconsistent)",
+                ),
+            )
+            return
+        if math.isfinite(stats.vertical_offset_m):
+            self.largest_offset_m = max(self.largest_offset_m, abs(stats.vertical_offset_m))
         update = self._score(frame.stamp) if self.publish_every_frame else None
         self.update_ms.append(1e3 * (time.perf_counter() - t0))
         self.frames += 1
@@ -188,6 +262,15 @@ class MappingNode:
         update = self._score(stamp)
         self.bus.publish(MapUpdate.TOPIC, update)
         return update
+
+    def counts(self) -> dict[str, float]:
+        """Frames set aside, and the largest vertical drift correction [m]."""
+        return {
+            "frames_skipped_no_pose": self.frames_skipped_no_pose,
+            "frames_repeated": self.frames_repeated,
+            "frames_inconsistent": self.frames_inconsistent,
+            "map_offset_max_m": self.largest_offset_m,
+        }
 
     def timing(self) -> dict[str, float]:
         """Median per-frame time of integration (and scoring, when every frame) [ms]."""

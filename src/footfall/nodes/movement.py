@@ -7,7 +7,9 @@ keeps the robot safe when the operator's link drops: with no command for
 ``command_timeout`` seconds while walking, the body stops at once (within the acceleration
 limit), the feet in the air land where they were going and no further step is taken, so the
 robot stands still with all feet down; the status says why, and the next command resumes
-it.
+it. Walking on a map, it stands still the same way while the pose estimate is older than
+``POSE_STALE_S`` or the map older than ``MAP_STALE_S`` (a lost SLAM track, a dead camera),
+and walks on once both are fresh again.
 """
 
 from __future__ import annotations
@@ -33,6 +35,9 @@ from footfall.runtime.bus import Bus
 
 # No command for this long while walking stops the robot [s].
 COMMAND_TIMEOUT_S = 0.5
+# Walking on a map, a pose estimate or a map this old stops the robot [s].
+POSE_STALE_S = 0.5
+MAP_STALE_S = 1.0
 
 
 class MovementNode:
@@ -64,6 +69,9 @@ class MovementNode:
         self._command_time = -math.inf
         self._fresh_command = False
         self._touchdowns_sent = 0
+        self._pose_stamp: float | None = None
+        self._map_stamp: float | None = None
+        self.stops = 0
         self.late_messages = 0
         # Messages the transport dropped as malformed, when the composition tells.
         self.transport_dropped: Callable[[], int] | None = None
@@ -105,31 +113,55 @@ class MovementNode:
         planner = self.controller.planner
         assert planner is not None
         planner.update(snapshot_of(message), scores_of(message))
+        self._map_stamp = message.stamp
 
     def _on_pose(self, message: PoseEstimate) -> None:
         self.controller.correct_pose(message.planar_body)
+        self._pose_stamp = message.stamp
         self.publish_status()
 
     # The tick ----------------------------------------------------------------------------
+    def _stale_sensors(self, t: float) -> str:
+        """Why the pose or the map is too old to walk on at ``t`` ("" when neither is)."""
+        if self.controller.planner is None:
+            return ""
+        for what, stamp, limit in (
+            ("pose estimate", self._pose_stamp, POSE_STALE_S),
+            ("map", self._map_stamp, MAP_STALE_S),
+        ):
+            if stamp is not None and t - stamp > limit:
+                return (
+                    f"the {what} is {t - stamp:.2f} s old (limit {limit:.2f} s): "
+                    f"standing still until a fresh {what} comes"
+                )
+        return ""
+
     def _command_now(self, t: float) -> WalkCommand | None:
-        """The command in force at ``t``: the latest, or a standstill once it is stale."""
+        """The command in force at ``t``: the latest, or a standstill once it is stale.
+
+        A stale pose estimate or map stops the robot the same way.
+        """
         if self._fresh_command:
             self._command_time = t
             self._fresh_command = False
-            self.stop_reason = ""
-            self.controller.holding = False
         if self.command is None:
             return None
         age = t - self._command_time
+        reason = self._stale_sensors(t)
         if self.command_timeout is not None and age > self.command_timeout:
+            reason = (
+                f"no command for {age:.2f} s (limit {self.command_timeout:.2f} s): "
+                "standing still until the next command"
+            )
+        if reason:
             if not self.stop_reason:
-                self.stop_reason = (
-                    f"no command for {age:.2f} s (limit {self.command_timeout:.2f} s): "
-                    "standing still until the next command"
-                )
+                self.stops += 1
+            self.stop_reason = reason
             # Stop the body now and land the feet in the air; take no further step.
             self.controller.holding = True
             return WalkCommand(speed=0.0, body_height=self.command.body_height)
+        self.stop_reason = ""
+        self.controller.holding = False
         return self.command
 
     def tick(self, t: float) -> None:
@@ -151,9 +183,11 @@ class MovementNode:
                 feet_in_world=c.feet_commanded_in_world,
             ),
         )
-        for record in c.touchdowns[self._touchdowns_sent :]:
-            self.bus.publish(Touchdown.TOPIC, record)
-        self._touchdowns_sent = len(c.touchdowns)
+        new = min(c.touchdown_count - self._touchdowns_sent, len(c.touchdowns))
+        if new > 0:
+            for record in list(c.touchdowns)[-new:]:
+                self.bus.publish(Touchdown.TOPIC, record)
+        self._touchdowns_sent = c.touchdown_count
         self.publish_status()
 
     def publish_status(self) -> GaitStatus:

@@ -18,7 +18,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, is_dataclass
 from pathlib import Path
 from typing import Any
 
@@ -204,17 +204,34 @@ class Replayer:
             defaults = kind()
             values: dict[str, object] = {}
             for f in fields(kind):
+                default = getattr(defaults, f.name)
+                if is_dataclass(default):
+                    nested = restore(type(default), f"{prefix}.{f.name}")
+                    if nested:
+                        values[f.name] = type(default)(**nested)
+                    continue
                 text = m.get(f"{prefix}.{f.name}")
-                if text is not None:
-                    cast = type(getattr(defaults, f.name))
+                if text is None:
+                    continue
+                cast = type(default)
+                if cast is bool:
+                    values[f.name] = text == "True"
+                else:
                     values[f.name] = str(text) if issubclass(cast, str) else cast(float(text))
             return values
 
-        map_values = restore(HeightMapConfig, "map")
-        if fusion is not None:
-            map_values["fusion"] = fusion
-        score = ScoreConfig(**restore(ScoreConfig, "score"))  # type: ignore[arg-type]
-        return HeightMapConfig(**map_values), score, int(m.get("stride", "1"))  # type: ignore[arg-type]
+        try:
+            map_values = restore(HeightMapConfig, "map")
+            if fusion is not None:
+                map_values["fusion"] = fusion
+            score = ScoreConfig(**restore(ScoreConfig, "score"))  # type: ignore[arg-type]
+            config = HeightMapConfig(**map_values)  # type: ignore[arg-type]
+            stride = int(m.get("stride", "1"))
+        except (ValueError, TypeError) as exc:
+            raise DatasetError(
+                f"{self.request.path}: malformed footfall/mapping metadata: {exc}"
+            ) from exc
+        return config, score, stride
 
     def _poses(self) -> tuple[list[float], list[Pose]]:
         times: list[float] = []
@@ -232,9 +249,22 @@ class Replayer:
         if self.mapping is None:
             config, score, stride = self.map_config()
             meta = self.recording.metadata.get("footfall/mapping", {})
-            if "centre_x" in meta:
-                xy = (float(meta["centre_x"]), float(meta["centre_y"]))
-            self.mapping = MappingNode(bus, config, score, False, centre=xy, stride=stride)
+            try:
+                if "centre_x" in meta:
+                    xy = (float(meta["centre_x"]), float(meta["centre_y"]))
+                self.mapping = MappingNode(
+                    bus,
+                    config,
+                    score,
+                    False,
+                    centre=xy,
+                    stride=stride,
+                    reject_repeats=meta.get("reject_repeats") == "True",
+                )
+            except (ValueError, KeyError) as exc:
+                raise DatasetError(
+                    f"{self.request.path}: malformed footfall/mapping metadata: {exc}"
+                ) from exc
         return self.mapping
 
     def run(self) -> MappingNode:

@@ -10,6 +10,7 @@ depth              /camera/depth/image_raw                sensor_msgs/Image (32F
 color, depth       /camera/color/image_raw                sensor_msgs/Image (rgb8)
 pose               /camera/pose                           geometry_msgs/PoseStamped
                    /tf (world -> base_link, camera)       tf2_msgs/TFMessage
+pose/raw           /footfall/pose/raw                     footfall_msgs/Encoded
 map                /map/grid                              grid_map_msgs/GridMap
                    /map/occupancy                         nav_msgs/OccupancyGrid
 effector_targets   /effector_targets, /tf (foot_0..5)     footfall_msgs/EffectorTargets
@@ -335,6 +336,9 @@ def to_ros(topic: str, message: Message) -> list[tuple[str, str, Any]]:
     elif type(message).__name__ == "ColorImage":
         rgb = image(message.stamp, CAMERA_FRAME, message.image, "rgb8")
         out.append(("/camera/color/image_raw", "sensor_msgs/msg/Image", rgb))
+    elif isinstance(message, PoseEstimate) and topic != PoseEstimate.TOPIC:
+        # A pose source's raw estimate, before the pose guard: kept, not the standard pose.
+        out.append((f"/footfall/{topic}", "footfall_msgs/msg/Encoded", encoded(message)))
     elif isinstance(message, PoseEstimate):
         stamped = _t("geometry_msgs/msg/PoseStamped")(
             header=header(message.stamp, WORLD_FRAME), pose=_pose(message.camera_in_world)

@@ -10,7 +10,7 @@ settings) goes into MCAP metadata records named ``footfall/...``.
 from __future__ import annotations
 
 import math
-from dataclasses import fields
+from dataclasses import fields, is_dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -18,12 +18,10 @@ from typing import Any
 from mcap.writer import CompressionType, Writer
 
 from footfall.errors import ConfigError
-from footfall.mapping.height_map import HeightMapConfig
 from footfall.messages import DepthFrame
 from footfall.messages.codec import Message
 from footfall.nodes.mapping import MappingNode
 from footfall.recording.ros_types import msgdef, to_ros, typestore
-from footfall.scoring.walkability import ScoreConfig
 
 PROFILE = "ros2"
 FORMAT_VERSION = "1"
@@ -55,17 +53,24 @@ def camera_metadata(frame: DepthFrame) -> dict[str, str]:
     }
 
 
+def _flat(prefix: str, settings: object) -> dict[str, str]:
+    """Settings as ``prefix.field`` strings, nested settings as ``prefix.field.subfield``."""
+    out: dict[str, str] = {}
+    for f in fields(settings):  # type: ignore[arg-type]
+        value = getattr(settings, f.name)
+        if is_dataclass(value):
+            out.update(_flat(f"{prefix}.{f.name}", value))
+        else:
+            out[f"{prefix}.{f.name}"] = str(value)
+    return out
+
+
 def mapping_metadata(node: MappingNode) -> dict[str, str]:
     """A mapping node's settings and starting centre, for a replay to build the same map."""
-    out = {
-        f"map.{f.name}": str(getattr(node.height_map.config, f.name))
-        for f in fields(HeightMapConfig)
-    }
-    out.update(
-        {f"score.{f.name}": repr(getattr(node.score_config, f.name)) for f in fields(ScoreConfig)}
-    )
+    out = {**_flat("map", node.height_map.config), **_flat("score", node.score_config)}
     out.update(
         stride=str(node.stride),
+        reject_repeats=str(node.reject_repeats),
         centre_x=repr(node.initial_centre[0]),
         centre_y=repr(node.initial_centre[1]),
     )

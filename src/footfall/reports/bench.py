@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -15,7 +15,7 @@ class BenchReport:
     """A benchmark's figures.
 
     Attributes:
-        suite: ``"mapping"`` or ``"terrain"``.
+        suite: ``"mapping"``, ``"terrain"``, ``"faults"`` or ``"soak"``.
         figures: The ``bench.json`` content.
     """
 
@@ -27,15 +27,25 @@ class BenchReport:
         return dict(self.figures)
 
     def write(self, out: Path) -> list[Path]:
-        """Write ``bench.json`` (and for the terrain sweep ``bench.png``) to ``out``."""
+        """Write ``bench.json`` (``soak.json`` for a soak) and its figure to ``out``."""
         out.mkdir(parents=True, exist_ok=True)
-        paths = [out / "bench.json"]
+        paths = [out / ("soak.json" if self.suite == "soak" else "bench.json")]
         write_json(paths[0], self.to_json())
         if self.suite == "terrain":
             from footfall.plots import plot_terrain_benchmark
 
             paths.append(out / "bench.png")
             plot_terrain_benchmark(self.figures, paths[1])
+        elif self.suite == "faults":
+            from footfall.reliability.plots import plot_fault_benchmark
+
+            paths.append(out / "bench.png")
+            plot_fault_benchmark(self.figures, paths[1])
+        elif self.suite == "soak":
+            from footfall.reliability.plots import plot_soak
+
+            paths.append(out / "soak.png")
+            plot_soak(self.figures, paths[1])
         return paths
 
 
@@ -59,3 +69,41 @@ def run_terrain_bench(
     if jobs < 1:
         raise ConfigError(f"--jobs must be at least 1, got {jobs}")
     return BenchReport("terrain", run_terrain_benchmark(seeds, seconds, on_run=on_run, jobs=jobs))
+
+
+def run_faults_bench(
+    seeds: int,
+    seconds: float,
+    faults: Sequence[tuple[str, str]] | None = None,
+    terrains: Sequence[str] | None = None,
+    jobs: int = 1,
+    on_run: Callable[[str], None] | None = None,
+) -> BenchReport:
+    """Every fault class on every terrain (see ``run_fault_benchmark``)."""
+    from footfall.reliability.faults_bench import (
+        FAULT_CLASSES,
+        FAULT_TERRAINS,
+        run_fault_benchmark,
+    )
+
+    figures = run_fault_benchmark(
+        seeds,
+        seconds,
+        faults=faults or FAULT_CLASSES,
+        terrains=terrains or FAULT_TERRAINS,
+        jobs=jobs,
+        on_run=on_run,
+    )
+    return BenchReport("faults", figures)
+
+
+def run_soak_bench(
+    minutes: float,
+    terrain: str = "cobblestones",
+    sample_seconds: float = 10.0,
+    on_sample: Callable[[dict[str, float]], None] | None = None,
+) -> BenchReport:
+    """Laps of a terrain for ``minutes`` of wall time (see ``run_soak``)."""
+    from footfall.reliability.soak import run_soak
+
+    return BenchReport("soak", run_soak(minutes, terrain, sample_seconds, on_sample=on_sample))

@@ -11,6 +11,7 @@ from footfall.messages import WalkCommand
 from footfall.motion.gait import GaitConfig
 from footfall.reports import write_json
 from footfall.robot.spec import HexapodSpec, load_spec
+from footfall.runtime.faults import FaultSpec
 from footfall.sim.model import CameraMount
 from footfall.sim.terrain import Terrain, make_terrain
 from footfall.sim.truth import TrueScores
@@ -45,6 +46,7 @@ class WalkRequest:
         record: An ``.mcap`` file to record every bus message to.
         rerun: An ``.rrd`` file to log the walk to for the rerun viewer.
         rerun_spawn: Open a rerun viewer on the walk.
+        faults: Faults to inject, as ``footfall walk --faults`` writes them ("" for none).
     """
 
     terrain: str = "stairs"
@@ -65,6 +67,7 @@ class WalkRequest:
     record: Path | None = None
     rerun: Path | None = None
     rerun_spawn: bool = False
+    faults: str = ""
 
 
 @dataclass(frozen=True)
@@ -129,6 +132,7 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
         seed=request.seed,
         stop_at_goal=True,
         realtime=request.realtime,
+        faults=FaultSpec.parse(request.faults),
     )
     return WalkJob(request, spec, settings, terrain, params)
 

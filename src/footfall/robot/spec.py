@@ -8,6 +8,7 @@ legs ``i``, ``i + 2`` and ``i + 4`` form a tripod (thesis eq. 5.15).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -141,6 +142,8 @@ class HexapodSpec:
     stride_length: float = 0.15
 
     def __post_init__(self) -> None:
+        for name, value in _numbers(self):
+            _require(math.isfinite(value), f"{name} must be a finite number, got {value}")
         _require(len(self.mounts) == NUM_LEGS, f"a hexapod has 6 legs, got {len(self.mounts)}")
         names = [m.name for m in self.mounts]
         _require(len(set(names)) == NUM_LEGS, f"leg names must be unique, got {names}")
@@ -196,6 +199,23 @@ class HexapodSpec:
         return feet
 
 
+def _numbers(value: object, name: str = "") -> list[tuple[str, float]]:
+    """Every number in a spec, by its dotted name (dataclass fields and tuples)."""
+    if isinstance(value, bool):
+        return []
+    if isinstance(value, int | float):
+        return [(name, float(value))]
+    if isinstance(value, tuple | list):
+        return [n for k, v in enumerate(value) for n in _numbers(v, f"{name}[{k}]")]
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return [
+            n
+            for f in dataclasses.fields(value)
+            for n in _numbers(getattr(value, f.name), f"{name}.{f.name}" if name else f.name)
+        ]
+    return []
+
+
 def _pair_deg(table: dict, key: str, default: tuple[float, float]) -> tuple[float, float]:
     if key not in table:
         return default
@@ -249,7 +269,9 @@ def spec_from_dict(data: dict) -> HexapodSpec:
         )
     except KeyError as exc:
         raise ConfigError(f"robot description is missing the key {exc}") from exc
-    except TypeError as exc:
+    except (TypeError, ValueError, AttributeError) as exc:
+        if isinstance(exc, ConfigError):
+            raise
         raise ConfigError(f"robot description has a malformed entry: {exc}") from exc
 
 
@@ -269,7 +291,10 @@ def load_spec(name_or_path: str | Path) -> HexapodSpec:
                 f"robot {str(name_or_path)!r} is neither a built-in robot "
                 f"({', '.join(BUILTIN_ROBOTS)}) nor an existing TOML file"
             )
-        text = path.read_text()
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError as exc:
+            raise ConfigError(f"robot description {path} is not UTF-8 text: {exc}") from exc
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -72,6 +72,11 @@ class PinholeCamera:
     noise: DepthNoiseModel = IDEAL
 
     def __post_init__(self) -> None:
+        values = {"fx": self.fx, "fy": self.fy, "cx": self.cx, "cy": self.cy}
+        values |= {"min_range": self.min_range}
+        for name, value in values.items():
+            if not math.isfinite(value):
+                raise ConfigError(f"camera {name} must be a finite number, got {value}")
         if not (self.fx > 0 and self.fy > 0):
             raise ConfigError(f"focal lengths must be positive, got fx={self.fx}, fy={self.fy}")
         if not (self.width > 0 and self.height > 0):

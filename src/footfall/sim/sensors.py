@@ -88,14 +88,22 @@ class SimPoseNode:
         bus: The bus.
         camera: The camera node whose images it answers.
         noise: SLAM-like noise, or None for the true pose.
+        topic: Where the estimates go (the pose guard's raw input on a walking robot).
     """
 
     name = "pose"
 
-    def __init__(self, bus: Bus, camera: SimCameraNode, noise: SlamNoise | None = None) -> None:
+    def __init__(
+        self,
+        bus: Bus,
+        camera: SimCameraNode,
+        noise: SlamNoise | None = None,
+        topic: str = PoseEstimate.TOPIC,
+    ) -> None:
         self.bus = bus
         self.camera = camera
         self.noise = noise
+        self.topic = topic
         self._body_in_camera = camera.camera_in_body.inverse()
         bus.subscribe(DepthFrame.TOPIC, self._on_depth)
 
@@ -103,4 +111,4 @@ class SimPoseNode:
         true_pose = self.camera.camera.pose(self.camera.backend.data)
         pose = self.noise.estimate(true_pose, frame.stamp) if self.noise is not None else true_pose
         estimate = PoseEstimate(frame.stamp, pose, pose.compose(self._body_in_camera))
-        self.bus.publish(PoseEstimate.TOPIC, estimate)
+        self.bus.publish(self.topic, estimate)

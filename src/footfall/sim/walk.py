@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
+import itertools
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -10,6 +13,7 @@ import numpy as np
 
 from footfall.control_loop import WalkingGraph, WalkLog
 from footfall.errors import ConfigError
+from footfall.mapping.drift import DriftConfig
 from footfall.mapping.height_map import HeightMapConfig
 from footfall.messages import GaitState, GroundPrior, Touchdown, WalkCommand
 from footfall.metrics import walk_metrics
@@ -17,10 +21,12 @@ from footfall.motion.feedback import FeedbackConfig
 from footfall.motion.gait import GaitConfig
 from footfall.motion.walker import WalkController
 from footfall.nodes.mapping import MappingNode
+from footfall.nodes.pose_guard import PoseGuardNode
 from footfall.planning.terrain_planner import TerrainPlanner, TerrainPlannerConfig
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus, InProcessBus
+from footfall.runtime.faults import RAW_POSE_TOPIC, FaultSpec, FaultyLink, TickFaults
 from footfall.runtime.scheduler import SimulatedScheduler, WallClockScheduler
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
 from footfall.sim.hexapod import MujocoHexapod
@@ -48,7 +54,7 @@ class WalkSettings:
         blind: The thesis' baseline: nominal footholds on the plane z = 0, no camera, no
             feedback. Otherwise the full loop: camera -> map -> scores -> footholds.
         camera: Depth camera (planned walking only).
-        map: Height map settings.
+        map: Height map settings (with vertical drift compensation by default).
         score: Score settings.
         planner: Foothold planner settings.
         feedback: Attitude and height feedback (planned walking only).
@@ -58,6 +64,8 @@ class WalkSettings:
         stop_at_goal: End the walk once the goal is reached.
         realtime: Pace the control ticks to the wall clock (as a real robot runs) instead
             of simulating as fast as the machine can.
+        faults: Sensor and timing faults injected between the nodes (see
+            :mod:`footfall.runtime.faults`); none by default.
     """
 
     terrain: str = "flat"
@@ -66,7 +74,9 @@ class WalkSettings:
     gait: GaitConfig = field(default_factory=GaitConfig)
     blind: bool = True
     camera: CameraMount = field(default_factory=lambda: CameraMount(width=320, height=240))
-    map: HeightMapConfig = field(default_factory=HeightMapConfig)
+    map: HeightMapConfig = field(
+        default_factory=lambda: HeightMapConfig(drift=DriftConfig(enabled=True))
+    )
     score: ScoreConfig = field(default_factory=ScoreConfig)
     planner: TerrainPlannerConfig = field(default_factory=TerrainPlannerConfig)
     feedback: FeedbackConfig = field(default_factory=FeedbackConfig)
@@ -75,6 +85,7 @@ class WalkSettings:
     seed: int = 0
     stop_at_goal: bool = False
     realtime: bool = False
+    faults: FaultSpec = field(default_factory=FaultSpec)
 
     def __post_init__(self) -> None:
         if self.terrain not in TERRAINS:
@@ -85,6 +96,10 @@ class WalkSettings:
             raise ConfigError(f"walk seconds must be positive, got {self.seconds}")
         if not self.control_rate_hz > 0:
             raise ConfigError(f"control rate must be positive, got {self.control_rate_hz}")
+        if self.blind and self.faults.sensor_faults:
+            raise ConfigError(
+                "sensor faults need the camera and pose source: a blind walk has neither"
+            )
 
 
 @dataclass(frozen=True)
@@ -121,7 +136,12 @@ class SimRobot:
         graph: The movement and servo nodes and the per-tick record.
         camera: The camera node (planned walking), else None.
         mapping: The mapping node (planned walking), else None.
+        guard: The pose guard (planned walking), else None.
+        link: The faulty link between the sensors and the rest (faults asked for), else
+            None.
         simulated_until: Controller time the physics has been stepped to [s].
+        control_seconds: Wall time of the last tick's control graph (controller, servo,
+            physics step) [s].
     """
 
     spec: HexapodSpec
@@ -132,7 +152,10 @@ class SimRobot:
     graph: WalkingGraph
     camera: SimCameraNode | None
     mapping: MappingNode | None
+    guard: PoseGuardNode | None = None
+    link: FaultyLink | None = None
     simulated_until: float = 0.0
+    control_seconds: float = 0.0
 
     @classmethod
     def build(
@@ -143,27 +166,35 @@ class SimRobot:
         bus: Bus,
         command_timeout: float | None = None,
         color: bool = False,
+        log_ticks: int | None = None,
     ) -> SimRobot:
         """Put the robot on the terrain, let it settle, and start its nodes on ``bus``.
 
-        Blind, only the movement and servo nodes run; planned, the camera, pose and mapping
-        nodes too, with the ground under the standing robot as a prior and a first frame.
-        With ``color`` the camera also renders colour images (for a station).
+        Blind, only the movement and servo nodes run; planned, the camera, pose, pose guard
+        and mapping nodes too, with the ground under the standing robot as a prior and a
+        first frame. The camera and the pose source publish through a faulty link when the
+        settings ask for faults. With ``color`` the camera also renders colour images (for
+        a station).
         """
         camera_mount = None if settings.blind else settings.camera
         height = settings.command.body_height
         backend = MujocoHexapod(spec, terrain, camera_mount, body_height=height)
         backend.advance(settings.settle_seconds)
-        planner = camera = mapping = None
+        planner = camera = mapping = guard = None
+        link = FaultyLink(bus, settings.faults, settings.seed) if settings.faults.active else None
         if not settings.blind:
             planner = TerrainPlanner(spec, settings.planner)
             standing = backend.read()
             assert standing.position_body_in_world is not None
             assert standing.feet_in_world is not None
             body = standing.position_body_in_world
-            mapping = MappingNode(bus, settings.map, settings.score, centre=(body[0], body[1]))
-            camera = SimCameraNode(bus, backend, settings.camera, color=color)
-            SimPoseNode(bus, camera)
+            mapping = MappingNode(
+                bus, settings.map, settings.score, centre=(body[0], body[1]), reject_repeats=True
+            )
+            sensors: Bus = link if link is not None else bus
+            camera = SimCameraNode(sensors, backend, settings.camera, color=color)
+            SimPoseNode(sensors, camera, topic=RAW_POSE_TOPIC)
+            guard = PoseGuardNode(bus)
             ground = float(np.mean(standing.feet_in_world[:, 2])) - spec.foot_radius
             bus.publish(GroundPrior.TOPIC, GroundPrior(0.0, body, ground, START_PRIOR_RADIUS))
             camera.tick(0.0)
@@ -175,8 +206,12 @@ class SimRobot:
             planner=planner,
             feedback=None if settings.blind else settings.feedback,
         )
-        graph = WalkingGraph.build(bus, backend, controller, command_timeout=command_timeout)
-        return cls(spec, settings, terrain, backend, bus, graph, camera, mapping)
+        if log_ticks is not None:
+            controller.touchdowns = deque(maxlen=log_ticks)
+        graph = WalkingGraph.build(
+            bus, backend, controller, command_timeout=command_timeout, log_ticks=log_ticks
+        )
+        return cls(spec, settings, terrain, backend, bus, graph, camera, mapping, guard, link)
 
     def step(self, t: float, dt: float) -> None:
         """One control tick at ``t``, the physics over ``dt``, and the camera if due [s].
@@ -188,7 +223,11 @@ class SimRobot:
         """
         if t > self.simulated_until + 1e-9:
             self.backend.advance(t - self.simulated_until)
+        if self.link is not None:
+            self.link.advance(t)
+        t0 = time.perf_counter()
         self.graph.step(t, dt)
+        self.control_seconds = time.perf_counter() - t0
         self.simulated_until = t + dt
         if self.camera is not None:
             self.camera.tick(t + dt)
@@ -255,8 +294,22 @@ class SimRobot:
         )
         if self.mapping is not None and self.camera is not None:
             metrics.update(
-                {"frames": self.mapping.frames, **self.mapping.timing(), **self.camera.timing()}
+                {
+                    "frames": self.mapping.frames,
+                    **self.mapping.counts(),
+                    **self.mapping.timing(),
+                    **self.camera.timing(),
+                }
             )
+        frozen = GaitState.FROZEN.value
+        metrics["freezes"] = sum(
+            b == frozen and a != frozen for a, b in itertools.pairwise(log.state)
+        )
+        metrics["stale_stops"] = self.graph.movement.stops
+        if self.guard is not None:
+            metrics["pose_jumps_detected"] = self.guard.jumps
+        if self.link is not None:
+            metrics["faults"] = dataclasses.asdict(self.link.counts)
         if isinstance(scheduler, WallClockScheduler):
             metrics.update(
                 {
@@ -314,8 +367,11 @@ def simulate_walk(
         else SimulatedScheduler(settings.control_rate_hz)
     )
     dt = scheduler.period
+    overruns = TickFaults(robot.link, dt) if robot.link is not None else None
 
     def tick(t: float) -> bool:
+        if overruns is not None and overruns.skips(t):
+            return False  # an earlier tick ran over this one's slot; the physics goes on
         task.command(t)
         robot.step(t, dt)
         if on_tick is not None:

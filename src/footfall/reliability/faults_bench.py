@@ -1,0 +1,213 @@
+"""``footfall bench faults``: every fault class over stairs, cobblestones and the course.
+
+Each run walks the planned robot (camera, map, footholds) to the terrain's goal with one
+fault class injected between the nodes (:mod:`footfall.runtime.faults`). A run succeeds
+when the robot reaches the goal without a fall and without an invalid foothold; a frozen
+robot is safe but has not succeeded. A run *recovered* when the robot had to stop or
+re-register on the way (it stood for a stale pose or map, froze, or the pose guard caught a
+jump) and still reached the goal.
+
+The same benchmark measures the map's height error under SLAM-like pose noise with and
+without vertical drift compensation (the survey of ``footfall map --noise slam``).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import statistics
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+
+from footfall.errors import ConfigError
+from footfall.runtime.faults import FaultSpec
+
+# The fault classes and the strength each is walked with.
+FAULT_CLASSES: tuple[tuple[str, str], ...] = (
+    ("none", ""),
+    ("drop", "drop=0.3"),
+    ("delay", "delay=0.2"),
+    ("repeat", "repeat=0.1"),
+    ("nan", "nan=0.05"),
+    ("drift", "drift=slam"),
+    ("jump", "jump=0.1:5@8"),
+    ("pose_loss", "pose_loss=1.0@10"),
+    ("overrun", "overrun=0.05"),
+)
+FAULT_TERRAINS = ("stairs", "cobblestones", "course")
+# The map-error survey: terrains and walking time [s].
+RMSE_TERRAINS = ("cobblestones", "course")
+RMSE_SECONDS = 20.0
+
+Job = tuple[str, str, str, int, float]
+
+
+def _walk(job: Job) -> dict[str, object]:
+    """One walk: ``(fault label, spec, terrain, seed, seconds)``."""
+    from footfall.robot.spec import load_spec
+    from footfall.sim.walk import WalkSettings, simulate_walk
+
+    _, spec, terrain, seed, seconds = job
+    settings = WalkSettings(
+        terrain=terrain,
+        seconds=seconds,
+        blind=False,
+        seed=seed,
+        stop_at_goal=True,
+        faults=FaultSpec.parse(spec),
+    )
+    m = simulate_walk(load_spec("default"), settings).metrics
+    stopped = int(m.get("freezes", 0)) + int(m.get("stale_stops", 0))
+    caught = int(m.get("pose_jumps_detected", 0)) + int(m.get("frames_inconsistent", 0))
+    reached = bool(m["reached_goal"]) and not m["fell"]
+    return {
+        "success": reached and m["invalid_footholds"] == 0,
+        "fell": bool(m["fell"]),
+        "invalid_footholds": int(m["invalid_footholds"]),
+        "frozen": bool(m["frozen"]),
+        "recovered": reached and (stopped + caught) > 0,
+        "wall_seconds": float(m["wall_seconds"]),
+    }
+
+
+def _map_error(job: tuple[str, int, bool]) -> float:
+    """Height RMSE of a SLAM-noise survey, ``(terrain, seed, compensate)`` [m]."""
+    from footfall.mapping.drift import DriftConfig
+    from footfall.mapping.height_map import HeightMapConfig
+    from footfall.robot.spec import load_spec
+    from footfall.sim.survey import MappingSettings, simulate_mapping
+
+    terrain, seed, compensate = job
+    settings = MappingSettings(
+        terrain=terrain,
+        seconds=RMSE_SECONDS,
+        noise="slam",
+        seed=seed,
+        map=HeightMapConfig(drift=DriftConfig(enabled=compensate)),
+    )
+    return float(simulate_mapping(load_spec("default"), settings).metrics["height_rmse_m"])
+
+
+def _run_all(
+    function: Callable, jobs: Sequence, workers: int, on_done: Callable[[object], None]
+) -> dict:
+    results = {}
+    if workers <= 1:
+        for job in jobs:
+            results[job] = function(job)
+            on_done(job)
+        return results
+    # Spawned, not forked: a fork of a process holding rendering contexts can deadlock.
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        futures = {pool.submit(function, job): job for job in jobs}
+        for future in as_completed(futures):
+            results[futures[future]] = future.result()
+            on_done(futures[future])
+    return results
+
+
+def fault_benchmark_runs(
+    seeds: int, faults: Sequence[tuple[str, str]], terrains: Sequence[str]
+) -> int:
+    """How many walks and surveys :func:`run_fault_benchmark` makes."""
+    return seeds * (len(faults) * len(terrains) + 2 * len(RMSE_TERRAINS))
+
+
+def parse_fault_classes(specs: Sequence[str]) -> tuple[tuple[str, str], ...]:
+    """Fault mixes given on the command line, each labelled by its spec; checked now."""
+    for spec in specs:
+        FaultSpec.parse(spec)
+    return tuple((spec or "none", spec) for spec in specs)
+
+
+def run_fault_benchmark(
+    seeds: int,
+    seconds: float = 90.0,
+    faults: Sequence[tuple[str, str]] = FAULT_CLASSES,
+    terrains: Sequence[str] = FAULT_TERRAINS,
+    jobs: int = 1,
+    on_run: Callable[[str], None] | None = None,
+) -> dict[str, object]:
+    """Walk every fault class on every terrain ``seeds`` times, and survey the map error.
+
+    Returns:
+        ``results`` rows (``fault``, ``spec``, ``terrain``, ``runs``, ``successes``,
+        ``falls``, ``invalid_footholds``, ``frozen``, ``recovered``, ``wall_seconds``),
+        totals ``falls``, ``invalid_footholds`` and ``success_rate``, and ``map_rmse`` with
+        the survey's mean height RMSE without and with drift compensation.
+    """
+    if seeds < 1:
+        raise ConfigError(f"--seeds must be at least 1, got {seeds}")
+    if jobs < 1:
+        raise ConfigError(f"--jobs must be at least 1, got {jobs}")
+    from footfall.sim.terrain import TERRAIN_NAMES
+
+    for terrain in terrains:
+        if terrain not in TERRAIN_NAMES:
+            raise ConfigError(
+                f"unknown terrain {terrain!r}; choose from {', '.join(TERRAIN_NAMES)}"
+            )
+    for _, spec in faults:
+        FaultSpec.parse(spec)
+
+    def progress(job: object) -> None:
+        if on_run is not None:
+            assert isinstance(job, tuple)
+            on_run(" ".join(str(part) for part in job[:4]))
+
+    walks: list[Job] = [
+        (label, spec, terrain, seed, seconds)
+        for label, spec in faults
+        for terrain in terrains
+        for seed in range(seeds)
+    ]
+    surveys = [
+        (terrain, seed, compensate)
+        for terrain in RMSE_TERRAINS
+        for seed in range(seeds)
+        for compensate in (False, True)
+    ]
+    outcomes = _run_all(_walk, walks, jobs, progress)
+    errors = _run_all(_map_error, surveys, jobs, progress)
+    rows = []
+    for label, spec in faults:
+        for terrain in terrains:
+            runs = [outcomes[(label, spec, terrain, seed, seconds)] for seed in range(seeds)]
+            rows.append(
+                {
+                    "fault": label,
+                    "spec": spec,
+                    "terrain": terrain,
+                    "runs": len(runs),
+                    "successes": sum(bool(r["success"]) for r in runs),
+                    "falls": sum(bool(r["fell"]) for r in runs),
+                    "invalid_footholds": sum(int(r["invalid_footholds"]) for r in runs),
+                    "frozen": sum(bool(r["frozen"]) for r in runs),
+                    "recovered": sum(bool(r["recovered"]) for r in runs),
+                    "wall_seconds": float(sum(float(r["wall_seconds"]) for r in runs)),
+                }
+            )
+    total_runs = sum(r["runs"] for r in rows)
+    per_survey = [
+        {"terrain": t, "seed": s, "compensated": c, "height_rmse_m": errors[(t, s, c)]}
+        for t, s, c in surveys
+    ]
+    return {
+        "seeds": seeds,
+        "seconds": seconds,
+        "results": rows,
+        "falls": sum(r["falls"] for r in rows),
+        "invalid_footholds": sum(r["invalid_footholds"] for r in rows),
+        "success_rate": sum(r["successes"] for r in rows) / max(total_runs, 1),
+        "map_rmse": {
+            "noise": "slam",
+            "survey_seconds": RMSE_SECONDS,
+            "without_compensation_m": statistics.fmean(
+                e["height_rmse_m"] for e in per_survey if not e["compensated"]
+            ),
+            "with_compensation_m": statistics.fmean(
+                e["height_rmse_m"] for e in per_survey if e["compensated"]
+            ),
+            "surveys": per_survey,
+        },
+    }

@@ -1,0 +1,212 @@
+"""``footfall bench soak``: walk laps for a long time and watch memory and per-frame time.
+
+The planned robot (camera, map, footholds) walks from a terrain's start to its goal, turns
+on the spot, walks back, and so on, for a given wall-clock time. The run keeps bounded
+logs (the per-tick record and the touchdowns as ring buffers). Every ``sample_seconds`` it
+samples the resident memory, the mean per-frame mapping time and per-tick control time
+since the last sample, and the number of live Python objects. ``soak.json`` holds the
+samples, the slope of each over time (least squares, per minute) and its growth from the
+first to the last window (``window_minutes``, ten minutes, or a third of a shorter run).
+"""
+
+from __future__ import annotations
+
+import gc
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from footfall.errors import ConfigError
+from footfall.messages import GaitState, WalkCommand
+from footfall.robot.spec import HexapodSpec, load_spec
+from footfall.runtime.bus import InProcessBus
+from footfall.runtime.scheduler import SimulatedScheduler
+from footfall.sim.task import TerrainTask
+from footfall.sim.terrain import make_terrain
+from footfall.sim.walk import SimRobot, WalkSettings
+
+# Rows of the per-tick record and touchdowns kept during a soak.
+LOG_TICKS = 2_000
+# Turn on the spot while the heading is this far off the way to the next end [rad].
+TURN_ON_SPOT = 0.35
+YAW_RATE = 0.3
+# An end of the lap counts as reached this close to it [m].
+END_TOLERANCE = 0.15
+# A soak that stays frozen this long has failed [s of walk time].
+FROZEN_LIMIT_S = 5.0
+QUANTITIES = ("rss_mb", "map_ms", "control_ms", "objects")
+
+
+def resident_mb() -> float:
+    """Resident memory of this process [MiB] (``/proc``; peak RSS where there is none)."""
+    try:
+        with open("/proc/self/statm") as f:
+            pages = int(f.read().split()[1])
+        import resource
+
+        return pages * resource.getpagesize() / 2**20
+    except OSError:
+        import resource
+
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+@dataclass
+class LapTask:
+    """Walk from end to end of a terrain and back, turning on the spot at each end.
+
+    Args:
+        ends: The two ends, world ``(x, y)`` [m].
+        command: Speed and body height.
+    """
+
+    ends: tuple[np.ndarray, np.ndarray]
+    command: WalkCommand
+    laps: int = 0
+    _target: int = 1
+
+    def next_command(self, x: float, y: float, yaw: float, t: float) -> WalkCommand:
+        """The command for a body at ``(x, y, yaw)`` at time ``t``."""
+        target = self.ends[self._target]
+        if math.hypot(target[0] - x, target[1] - y) < END_TOLERANCE:
+            self._target = 1 - self._target
+            self.laps += self._target == 1  # back at the start: one lap done
+            target = self.ends[self._target]
+        heading = math.atan2(target[1] - y, target[0] - x)
+        error = math.atan2(math.sin(heading - yaw), math.cos(heading - yaw))
+        height = self.command.body_height
+        if abs(error) > TURN_ON_SPOT:
+            return WalkCommand(
+                speed=0.0, body_height=height, yaw_rate=math.copysign(YAW_RATE, error), stamp=t
+            )
+        yaw_rate = float(np.clip(error, -YAW_RATE, YAW_RATE))
+        return WalkCommand(speed=self.command.speed, body_height=height, yaw_rate=yaw_rate, stamp=t)
+
+
+def trends(samples: list[dict[str, float]], window_minutes: float) -> dict[str, object]:
+    """Slope per minute and first-to-last-window growth of every sampled quantity."""
+    minutes = np.array([s["wall_minutes"] for s in samples])
+    slopes, growth, first, last = {}, {}, {}, {}
+    early = minutes <= minutes[0] + window_minutes
+    late = minutes >= minutes[-1] - window_minutes
+    for name in QUANTITIES:
+        values = np.array([s[name] for s in samples], dtype=np.float64)
+        ok = np.isfinite(values)
+        slopes[name] = (
+            float(np.polyfit(minutes[ok], values[ok], 1)[0]) if ok.sum() >= 2 else math.nan
+        )
+        a = float(np.nanmean(values[early & ok])) if (early & ok).any() else math.nan
+        b = float(np.nanmean(values[late & ok])) if (late & ok).any() else math.nan
+        first[name], last[name] = a, b
+        growth[name] = (b - a) / a if a else math.nan
+    return {
+        "slope_per_minute": slopes,
+        "first_window_mean": first,
+        "last_window_mean": last,
+        "growth": growth,
+    }
+
+
+def run_soak(
+    minutes: float,
+    terrain: str = "cobblestones",
+    sample_seconds: float = 10.0,
+    spec: HexapodSpec | None = None,
+    on_sample: Callable[[dict[str, float]], None] | None = None,
+) -> dict[str, object]:
+    """Walk laps for ``minutes`` of wall time, sampling memory and per-frame times.
+
+    Returns:
+        The ``soak.json`` content (see the module docstring).
+
+    Raises:
+        ConfigError: A run shorter than two samples.
+    """
+    if not (math.isfinite(minutes) and minutes * 60.0 >= 2 * sample_seconds > 0):
+        raise ConfigError(
+            f"a soak needs at least two samples: --minutes {minutes} with a sample every "
+            f"{sample_seconds} s"
+        )
+    spec = spec or load_spec("default")
+    settings = WalkSettings(terrain=terrain, seconds=1e9, blind=False)
+    bus = InProcessBus()
+    ground = make_terrain(settings.terrain, seed=settings.seed)
+    robot = SimRobot.build(spec, settings, ground, bus, log_ticks=LOG_TICKS)
+    mapping = robot.mapping
+    assert mapping is not None
+    # The terrain task only judges (a fall, a robot frozen too long); the laps steer.
+    judge = TerrainTask(bus, ground, settings.command, frozen_timeout=FROZEN_LIMIT_S)
+    laps = LapTask(
+        (np.array(ground.start, dtype=float), np.array(ground.goal, dtype=float)),
+        settings.command,
+    )
+    judge.begin()
+    scheduler = SimulatedScheduler(settings.control_rate_hz)
+    dt = scheduler.period
+    samples: list[dict[str, float]] = []
+    wall_start = time.perf_counter()
+    next_sample = wall_start + sample_seconds
+    frames_seen = 0
+    tick_ms: list[float] = []
+    sim_seconds = 0.0
+    end_reason = ""
+
+    def tick(t: float) -> bool:
+        nonlocal next_sample, frames_seen, end_reason, sim_seconds
+        assert judge.status is not None
+        pose = judge.status.body_pose
+        bus.publish(WalkCommand.TOPIC, laps.next_command(pose.x, pose.y, pose.yaw, t))
+        robot.step(t, dt)
+        tick_ms.append(1e3 * robot.control_seconds)
+        sim_seconds = t + dt
+        if judge.should_stop(t + dt):
+            frozen = judge.status.state is GaitState.FROZEN
+            end_reason = (
+                f"frozen for {FROZEN_LIMIT_S:g} s: {judge.status.frozen_reason}"
+                if frozen
+                else "the robot fell"
+            )
+            return True
+        now = time.perf_counter()
+        if now < next_sample:
+            return now - wall_start >= minutes * 60.0
+        new_frames = mapping.frames - frames_seen
+        frames_seen = mapping.frames
+        recent = list(mapping.update_ms)[-new_frames:] if new_frames > 0 else []
+        sample = {
+            "wall_minutes": (now - wall_start) / 60.0,
+            "sim_seconds": t + dt,
+            "laps": laps.laps,
+            "rss_mb": resident_mb(),
+            "map_ms": float(np.mean(recent)) if recent else math.nan,
+            "control_ms": float(np.mean(tick_ms)) if tick_ms else math.nan,
+            "objects": float(len(gc.get_objects())),
+        }
+        tick_ms.clear()
+        samples.append(sample)
+        if on_sample is not None:
+            on_sample(sample)
+        next_sample += sample_seconds
+        return now - wall_start >= minutes * 60.0
+
+    scheduler.run(tick, settings.seconds)
+    robot.close()
+    window = min(10.0, minutes / 3.0)
+    figures: dict[str, object] = {
+        "minutes": minutes,
+        "terrain": terrain,
+        "sample_seconds": sample_seconds,
+        "window_minutes": window,
+        "laps": laps.laps,
+        "sim_seconds": sim_seconds,
+        "fell": end_reason == "the robot fell",
+        "ended_early": end_reason,
+        "log_ticks_kept": len(robot.graph.recorder.log.time),
+        "samples": samples,
+    }
+    if len(samples) >= 2:
+        figures.update(trends(samples, window))
+    return figures
