@@ -70,7 +70,7 @@ def plot_soak(soak: dict, path: Path) -> Path:
         if key in slopes:
             ax.set_title(
                 f"slope {slopes[key]:+.3g}/min, growth {growth[key]:+.1%} "
-                f"(first to last {soak['window_minutes']:g} min)",
+                f"(first to last {soak['window_minutes']:.3g} min)",
                 fontsize=9,
             )
     for ax in axes[1]:

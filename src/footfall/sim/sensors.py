@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import statistics
 import time
+from collections import deque
 
 from scipy.spatial.transform import Rotation
 
 from footfall.messages import ColorImage, DepthFrame, PoseEstimate
+from footfall.nodes.mapping import TIMING_HISTORY
 from footfall.runtime.bus import Bus
 from footfall.sensing.pose import Pose, SlamNoise
 from footfall.sim.camera import SimDepthCamera
@@ -50,7 +52,8 @@ class SimCameraNode:
             true_body_pose(backend).inverse().compose(self.camera.pose(backend.data))
         )
         self.color = color
-        self.render_ms: list[float] = []
+        self.render_ms: deque[float] = deque(maxlen=TIMING_HISTORY)
+        self.frames = 0
         self._next_frame = 0.0
 
     def tick(self, t: float) -> bool:
@@ -62,8 +65,9 @@ class SimCameraNode:
         t0 = time.perf_counter()
         depth, _ = self.camera.capture(self.backend.data)
         self.render_ms.append(1e3 * (time.perf_counter() - t0))
+        self.frames += 1
         frame = DepthFrame(
-            t, depth, self.camera.intrinsics, self.camera_in_body, sequence=len(self.render_ms)
+            t, depth, self.camera.intrinsics, self.camera_in_body, sequence=self.frames
         )
         self.bus.publish(DepthFrame.TOPIC, frame)
         if self.color:
