@@ -30,3 +30,10 @@ def shared_data(relative: str):
     if not path.exists():
         pytest.skip(f"shared reference data not present: {relative}")
     return path
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """Write the fuzz tests' example counts when a report file is asked for."""
+    from fuzzing import write_report
+
+    write_report()

@@ -7,7 +7,7 @@ import io
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 from PIL import Image
 
@@ -16,10 +16,9 @@ from footfall.datasets.tum import check_depth_units, load_depth_png, read_tum_se
 from footfall.errors import DatasetError, FootfallError
 from footfall.io.clouds import read_points
 from footfall.io.pcd import read_pcd
+from fuzzing import COUNTS, fuzz_settings
 
-FUZZ = settings(
-    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
-)
+FUZZ = fuzz_settings(150)
 
 
 def _pcd(kind: str, points: np.ndarray) -> bytes:
@@ -72,6 +71,7 @@ def test_mutated_pcd_files_fail_cleanly(tmp_path, data, kind):
     points = np.random.default_rng(1).normal(size=(30, 3))
     path = tmp_path / "m.pcd"
     path.write_bytes(_mutate(_pcd(kind, points), data.draw))
+    COUNTS[f"PCD {kind}"] += 1
     try:
         read_points(path)
     except FootfallError as exc:
@@ -107,6 +107,7 @@ def test_mutated_ply_and_npy_files_fail_cleanly(tmp_path, data, binary):
     np.save(buffer, points)
     npy.write_bytes(_mutate(buffer.getvalue(), data.draw))
     for path in (ply, npy):
+        COUNTS[f"{'PLY' if path is ply else 'NumPy'} file"] += 1
         try:
             read_points(path)
         except FootfallError:
@@ -133,6 +134,8 @@ def test_mutated_tum_sequences_fail_cleanly(tmp_path, data):
     (tmp_path / "groundtruth.txt").write_bytes(_mutate(truth, data.draw))
     log = b"0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"
     (tmp_path / "trajectory.log").write_bytes(_mutate(log, data.draw))
+    COUNTS["TUM sequence"] += 1
+    COUNTS["Redwood trajectory"] += 1
     try:
         frames, _ = read_tum_sequence(tmp_path)
         for frame in frames:

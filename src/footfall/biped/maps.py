@@ -36,6 +36,8 @@ from footfall.errors import ConfigError
 TEST_CASE_RADIUS = 0.2  # [m]
 FOOT_LENGTH = 0.12  # sole length [m]
 DEFAULT_HIP_WIDTH = 0.2  # [m]
+# The largest coordinate or radius a map may hold [m].
+MAX_COORDINATE = 1e5
 # A box longer than this many times its width is refused (as many circles would cover it).
 MAX_BOX_CIRCLES = 1000
 
@@ -103,11 +105,17 @@ class PlanMap:
         if not (math.isfinite(self.hip_width) and self.hip_width > 0):
             raise ConfigError(f"hip_width must be a positive number, got {self.hip_width}")
         for what, point in (("start", self.start), ("goal", self.goal)):
-            if not all(math.isfinite(v) for v in point):
-                raise ConfigError(f"map {what} must be finite coordinates, got {point}")
+            if not all(math.isfinite(v) and abs(v) <= MAX_COORDINATE for v in point):
+                raise ConfigError(
+                    f"map {what} must be finite coordinates within {MAX_COORDINATE:g} m, "
+                    f"got {point}"
+                )
         for c in self.obstacles:
-            if not all(math.isfinite(v) for v in (c.x, c.y, c.r)):
-                raise ConfigError(f"obstacle ({c.x}, {c.y}, r={c.r}) holds a non-finite number")
+            if not all(math.isfinite(v) and abs(v) <= MAX_COORDINATE for v in (c.x, c.y, c.r)):
+                raise ConfigError(
+                    f"obstacle ({c.x}, {c.y}, r={c.r}) must hold finite numbers within "
+                    f"{MAX_COORDINATE:g} m"
+                )
             if not c.r > 0:
                 raise ConfigError(f"obstacle at ({c.x}, {c.y}) has a non-positive radius {c.r}")
 
@@ -143,6 +151,8 @@ def map_from_dict(data: dict, name: str = "map") -> PlanMap:
     Raises:
         ConfigError: On a missing key or a malformed entry (named).
     """
+    if not isinstance(data, dict):
+        raise ConfigError(f"a map is a JSON object, got {type(data).__name__}")
     try:
         obstacles: list[Circle] = []
         for k, entry in enumerate(data.get("obstacles", [])):
@@ -179,7 +189,9 @@ def map_from_dict(data: dict, name: str = "map") -> PlanMap:
         )
     except KeyError as exc:
         raise ConfigError(f"map is missing the key {exc}") from exc
-    except (TypeError, ValueError, IndexError) as exc:
+    except (TypeError, ValueError, IndexError, AttributeError, OverflowError) as exc:
+        if isinstance(exc, ConfigError):
+            raise
         raise ConfigError(f"map has a malformed entry: {exc}") from exc
 
 
@@ -193,9 +205,11 @@ def load_map(path: str | Path) -> PlanMap:
     if not p.is_file():
         raise ConfigError(f"map file {p} does not exist")
     try:
-        data = json.loads(p.read_text())
-    except json.JSONDecodeError as exc:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ConfigError(f"map file {p} is not JSON: {exc}") from exc
+    except RecursionError as exc:
+        raise ConfigError(f"map file {p} nests too deeply") from exc
     return map_from_dict(data, name=p.stem)
 
 

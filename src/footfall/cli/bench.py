@@ -71,6 +71,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     faults.add_argument("--seeds", type=int, default=5, help="runs per fault class and terrain")
     faults.add_argument("--seconds", type=float, default=90.0, help="longest walk in seconds")
     faults.add_argument(
+        "--survey-seconds",
+        type=float,
+        default=20.0,
+        help="walking time of each map-error survey under SLAM noise",
+    )
+    faults.add_argument(
         "--faults",
         action="append",
         metavar="SPEC",
@@ -209,6 +215,7 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
             terrains=terrains,
             jobs=args.jobs,
             on_run=lambda label: progress.update(task, advance=1, description=label),
+            survey_seconds=args.survey_seconds,
         )
     paths = report.write(args.out)
     bench = report.to_json()

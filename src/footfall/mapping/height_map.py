@@ -98,8 +98,10 @@ class HeightMapConfig:
         object.__setattr__(self, "fusion", FusionRule(self.fusion))
         if self.size < 8:
             raise ConfigError(f"height map size must be >= 8 cells, got {self.size}")
-        if not (math.isfinite(self.resolution) and self.resolution > 0):
-            raise ConfigError(f"height map resolution must be positive, got {self.resolution}")
+        if not (math.isfinite(self.resolution) and 1e-4 <= self.resolution <= 100.0):
+            raise ConfigError(
+                f"height map resolution must lie in [0.0001, 100] m, got {self.resolution}"
+            )
         for name in ("range_noise", "process_noise", "gate", "noise_spread_sigmas"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
@@ -156,6 +158,17 @@ class MapSnapshot:
     resolution: float
     spread: npt.NDArray[np.float64] | None = None
     variance: npt.NDArray[np.float64] | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.resolution) and self.resolution > 0):
+            raise ConfigError(f"a map's resolution must be positive, got {self.resolution}")
+        if np.ndim(self.heights) != 2 or np.shape(self.known) != np.shape(self.heights):
+            raise ConfigError(
+                f"a map needs 2-D heights and a known mask of one shape, got "
+                f"{np.shape(self.heights)} and {np.shape(self.known)}"
+            )
+        if not all(math.isfinite(v) for v in self.origin):
+            raise ConfigError(f"a map's origin must be finite, got {self.origin}")
 
     @property
     def size(self) -> int:

@@ -120,6 +120,7 @@ class MappingNode:
         self.points_outside = 0
         self.largest_offset_m = 0.0
         self.update_ms: deque[float] = deque(maxlen=TIMING_HISTORY)
+        self.update_cpu_ms: deque[float] = deque(maxlen=TIMING_HISTORY)
         self.camera_path_xy: deque[tuple[float, float]] = deque(maxlen=PATH_HISTORY)
         self._poses: deque[PoseEstimate] = deque(maxlen=POSE_HISTORY)
         self._pending: deque[DepthFrame] = deque()
@@ -216,7 +217,7 @@ class MappingNode:
             self._skip(frame, "repeats the previous image although the camera moved", count=False)
             return
         self._previous = (frame, pose)
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), time.thread_time()
         body = pose.body_in_world.position
         self.height_map.recentre((float(body[0]), float(body[1])))
         stats = self.height_map.integrate_depth(
@@ -243,6 +244,7 @@ class MappingNode:
             self.largest_offset_m = max(self.largest_offset_m, abs(stats.vertical_offset_m))
         update = self._score(frame.stamp) if self.publish_every_frame else None
         self.update_ms.append(1e3 * (time.perf_counter() - t0))
+        self.update_cpu_ms.append(1e3 * (time.thread_time() - cpu0))
         self.frames += 1
         self.pixels_dropped += stats.depth.dropped
         self.points_outside += stats.outside

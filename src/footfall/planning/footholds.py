@@ -13,6 +13,7 @@ is the mapped height of the chosen cell (§6.4).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -21,6 +22,9 @@ import numpy.typing as npt
 
 from footfall.errors import ConfigError
 from footfall.scoring.walkability import ScoreMap
+
+# The widest search, in cells of the map searched.
+MAX_SEARCH_CELLS = 500
 
 
 @dataclass(frozen=True)
@@ -159,6 +163,12 @@ class FootholdSearch:
     """
 
     def __init__(self, config: FootholdConfig, resolution: float) -> None:
+        radius_cells = config.search_radius / resolution if resolution > 0 else math.inf
+        if not (math.isfinite(radius_cells) and radius_cells <= MAX_SEARCH_CELLS):
+            raise ConfigError(
+                f"a search radius of {config.search_radius} m on {resolution} m cells is "
+                f"beyond {MAX_SEARCH_CELLS} cells"
+            )
         self.config = config
         self.resolution = resolution
         self.offsets, self.distances = sorted_offsets(config.search_radius / resolution)
@@ -192,6 +202,8 @@ class FootholdSearch:
             The foothold, or None when no cell within the radius passes.
         """
         nominal = np.asarray(nominal_xy, dtype=np.float64)
+        if nominal.shape != (2,) or not np.all(np.abs(nominal) < 1e9):
+            raise ConfigError(f"a nominal foothold must be two finite coordinates, got {nominal}")
         res = scores.resolution
         origin = np.asarray(scores.origin)
         centre = np.floor((nominal - origin) / res).astype(np.int64)

@@ -17,7 +17,7 @@ from typing import Any
 
 from rosbags.typesys import get_types_from_msg
 
-from footfall.errors import DatasetError
+from footfall.errors import DatasetError, FootfallError
 from footfall.recording.ros_types import typestore
 
 _SEPARATOR = re.compile(r"^={10,}\s*$", re.MULTILINE)
@@ -96,7 +96,6 @@ class Recording:
             self._open_rosbags()
 
     def _open_mcap(self) -> None:
-        from mcap.exceptions import McapError
         from mcap.reader import make_reader
 
         try:
@@ -116,8 +115,12 @@ class Recording:
                         continue
                     self.channels[channel.topic] = _ros2_name(schema.name)
                 self.metadata = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
-        except (McapError, ValueError, OSError, EOFError) as exc:
-            raise DatasetError(f"{self.path}: not a readable MCAP file ({exc})") from exc
+        except FootfallError:
+            raise
+        except Exception as exc:  # McapError, and the compression libraries' own kinds
+            raise DatasetError(
+                f"{self.path}: not a readable MCAP file ({type(exc).__name__}: {exc})"
+            ) from exc
 
     def _open_rosbags(self) -> None:
         from rosbags.highlevel import AnyReader
@@ -167,13 +170,24 @@ class Recording:
         return self.channels[topic]
 
     def messages(self, topics: set[str] | None = None) -> Iterator[RecordedMessage]:
-        """The messages on ``topics`` (all by default), in log-time order."""
-        if self.kind == "mcap":
-            yield from self._mcap_messages(topics)
-        elif self.kind == "sqlite3":
-            yield from self._sqlite3_messages(topics)
-        else:
-            yield from self._rosbags_messages(topics)
+        """The messages on ``topics`` (all by default), in log-time order.
+
+        Raises:
+            DatasetError: A corrupt file or message (the decoders' own errors, named).
+        """
+        try:
+            if self.kind == "mcap":
+                yield from self._mcap_messages(topics)
+            elif self.kind == "sqlite3":
+                yield from self._sqlite3_messages(topics)
+            else:
+                yield from self._rosbags_messages(topics)
+        except FootfallError:
+            raise
+        except Exception as exc:  # the format libraries raise their own kinds on corrupt data
+            raise DatasetError(
+                f"{self.path}: corrupt recording ({type(exc).__name__}: {exc})"
+            ) from exc
 
     def _sqlite3_messages(self, topics: set[str] | None) -> Iterator[RecordedMessage]:
         from rosbags.rosbag2 import Reader
@@ -211,7 +225,7 @@ class Recording:
                         message = store.deserialize_cdr(record.data, typename)
                         yield RecordedMessage(record.log_time, topic, typename, message)
         except (McapError, ValueError, OSError, EOFError) as exc:
-            raise DatasetError(f"{self.path}: {exc}") from exc
+            raise DatasetError(f"{self.path}: {type(exc).__name__}: {exc}") from exc
 
     def _rosbags_messages(self, topics: set[str] | None) -> Iterator[RecordedMessage]:
         from rosbags.highlevel import AnyReader

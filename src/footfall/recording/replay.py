@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from footfall.errors import ConfigError, DatasetError
+from footfall.errors import ConfigError, DatasetError, FootfallError
 from footfall.mapping.height_map import HeightMapConfig
 from footfall.messages import DepthFrame, GroundPrior, PoseEstimate
 from footfall.messages.codec import Message
@@ -43,6 +43,8 @@ from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.noise import DepthNoiseModel, sensor_noise
 from footfall.sensing.pose import Pose
 
+# What a decoded message with a field missing or out of range raises on the way to a frame.
+CORRUPT_DATA = (KeyError, ValueError, TypeError, IndexError, AttributeError, OverflowError)
 POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
 DEPTH_TYPES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
 
@@ -160,12 +162,19 @@ class Replayer:
         self.footfall = "footfall/recording" in meta
         camera = meta.get("footfall/camera", {})
         if camera:
-            self.noise = DepthNoiseModel(
-                float(camera["noise_base_m"]),
-                float(camera["noise_quadratic_per_m"]),
-                float(camera["noise_offset_m"]),
-            )
-            self.limits = (float(camera["min_range_m"]), float(camera["max_range_m"]))
+            try:
+                self.noise = DepthNoiseModel(
+                    float(camera["noise_base_m"]),
+                    float(camera["noise_quadratic_per_m"]),
+                    float(camera["noise_offset_m"]),
+                )
+                self.limits = (float(camera["min_range_m"]), float(camera["max_range_m"]))
+            except (KeyError, ValueError) as exc:
+                if isinstance(exc, FootfallError):
+                    raise
+                raise DatasetError(
+                    f"{request.path}: malformed footfall/camera metadata ({exc!r})"
+                ) from exc
         else:
             self.noise = sensor_noise(request.sensor)
             self.limits = (0.0, 10.0)
@@ -268,7 +277,21 @@ class Replayer:
         return self.mapping
 
     def run(self) -> MappingNode:
-        """Replay the recording; returns the mapping node with the map it built and scored."""
+        """Replay the recording; returns the mapping node with the map it built and scored.
+
+        Raises:
+            DatasetError: No image could be mapped, or a message is corrupt or malformed.
+        """
+        try:
+            return self._replay()
+        except FootfallError:
+            raise
+        except CORRUPT_DATA as exc:  # a field missing or out of range in a decoded message
+            raise DatasetError(
+                f"{self.request.path}: a corrupt or malformed message ({type(exc).__name__}: {exc})"
+            ) from exc
+
+    def _replay(self) -> MappingNode:
         bus = InProcessBus()
         for tap in self.taps:
             bus.tap(tap)

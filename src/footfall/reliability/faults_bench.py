@@ -13,6 +13,7 @@ without vertical drift compensation (the survey of ``footfall map --noise slam``
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import statistics
 from collections.abc import Callable, Sequence
@@ -69,17 +70,17 @@ def _walk(job: Job) -> dict[str, object]:
     }
 
 
-def _map_error(job: tuple[str, int, bool]) -> float:
-    """Height RMSE of a SLAM-noise survey, ``(terrain, seed, compensate)`` [m]."""
+def _map_error(job: tuple[str, int, bool, float]) -> float:
+    """Height RMSE of a SLAM-noise survey, ``(terrain, seed, compensate, seconds)`` [m]."""
     from footfall.mapping.drift import DriftConfig
     from footfall.mapping.height_map import HeightMapConfig
     from footfall.robot.spec import load_spec
     from footfall.sim.survey import MappingSettings, simulate_mapping
 
-    terrain, seed, compensate = job
+    terrain, seed, compensate, seconds = job
     settings = MappingSettings(
         terrain=terrain,
-        seconds=RMSE_SECONDS,
+        seconds=seconds,
         noise="slam",
         seed=seed,
         map=HeightMapConfig(drift=DriftConfig(enabled=compensate)),
@@ -127,8 +128,11 @@ def run_fault_benchmark(
     terrains: Sequence[str] = FAULT_TERRAINS,
     jobs: int = 1,
     on_run: Callable[[str], None] | None = None,
+    survey_seconds: float = RMSE_SECONDS,
 ) -> dict[str, object]:
     """Walk every fault class on every terrain ``seeds`` times, and survey the map error.
+
+    Each survey walks ``survey_seconds`` under SLAM noise, without and with compensation.
 
     Returns:
         ``results`` rows (``fault``, ``spec``, ``terrain``, ``runs``, ``successes``,
@@ -161,8 +165,10 @@ def run_fault_benchmark(
         for terrain in terrains
         for seed in range(seeds)
     ]
+    if not (math.isfinite(survey_seconds) and survey_seconds > 0):
+        raise ConfigError(f"--survey-seconds must be positive, got {survey_seconds}")
     surveys = [
-        (terrain, seed, compensate)
+        (terrain, seed, compensate, survey_seconds)
         for terrain in RMSE_TERRAINS
         for seed in range(seeds)
         for compensate in (False, True)
@@ -189,8 +195,8 @@ def run_fault_benchmark(
             )
     total_runs = sum(r["runs"] for r in rows)
     per_survey = [
-        {"terrain": t, "seed": s, "compensated": c, "height_rmse_m": errors[(t, s, c)]}
-        for t, s, c in surveys
+        {"terrain": t, "seed": s, "compensated": c, "height_rmse_m": errors[(t, s, c, d)]}
+        for t, s, c, d in surveys
     ]
     return {
         "seeds": seeds,
@@ -201,7 +207,7 @@ def run_fault_benchmark(
         "success_rate": sum(r["successes"] for r in rows) / max(total_runs, 1),
         "map_rmse": {
             "noise": "slam",
-            "survey_seconds": RMSE_SECONDS,
+            "survey_seconds": survey_seconds,
             "without_compensation_m": statistics.fmean(
                 e["height_rmse_m"] for e in per_survey if not e["compensated"]
             ),

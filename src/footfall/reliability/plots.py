@@ -55,23 +55,29 @@ def plot_soak(soak: dict, path: Path) -> Path:
     samples = soak["samples"]
     minutes = [s["wall_minutes"] for s in samples]
     panels = (
-        ("rss_mb", "resident memory [MiB]"),
-        ("map_ms", "mapping per frame [ms]"),
-        ("control_ms", "control per tick [ms]"),
-        ("objects", "live Python objects"),
+        (("rss_mb",), "resident memory [MiB]"),
+        (("map_ms", "map_cpu_ms"), "mapping per frame [ms]"),
+        (("control_ms", "control_cpu_ms"), "control per tick [ms]"),
+        (("objects",), "live Python objects"),
     )
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True, constrained_layout=True)
     slopes = soak.get("slope_per_minute", {})
     growth = soak.get("growth", {})
-    for ax, (key, label) in zip(axes.ravel(), panels, strict=True):
-        ax.plot(minutes, [s[key] for s in samples], ".-", ms=3)
+    for ax, (keys, label) in zip(axes.ravel(), panels, strict=True):
+        titles = []
+        for key in keys:
+            kind = "CPU" if "cpu" in key else "wall"
+            ax.plot(minutes, [s[key] for s in samples], ".-", ms=3, label=kind)
+            if key in slopes:
+                titles.append(f"{kind} {slopes[key]:+.3g}/min, {growth[key]:+.1%}")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-        if key in slopes:
+        if len(keys) > 1:
+            ax.legend(fontsize=8)
+        if titles:
             ax.set_title(
-                f"slope {slopes[key]:+.3g}/min, growth {growth[key]:+.1%} "
-                f"(first to last {soak['window_minutes']:.3g} min)",
-                fontsize=9,
+                "; ".join(titles) + f" (first to last {soak['window_minutes']:.3g} min)",
+                fontsize=8,
             )
     for ax in axes[1]:
         ax.set_xlabel("wall time [min]")

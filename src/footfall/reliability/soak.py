@@ -4,7 +4,8 @@ The planned robot (camera, map, footholds) walks from a terrain's start to its g
 on the spot, walks back, and so on, for a given wall-clock time. The run keeps bounded
 logs (the per-tick record and the touchdowns as ring buffers). Every ``sample_seconds`` it
 samples the resident memory, the mean per-frame mapping time and per-tick control time
-since the last sample, and the number of live Python objects. ``soak.json`` holds the
+since the last sample (wall and CPU time: the CPU time does not change when other
+processes share the machine), and the number of live Python objects. ``soak.json`` holds the
 samples, the slope of each over time (least squares, per minute) and its growth from the
 first to the last window (``window_minutes``, ten minutes, or a third of a shorter run).
 """
@@ -37,7 +38,7 @@ YAW_RATE = 0.3
 END_TOLERANCE = 0.15
 # A soak that stays frozen this long has failed [s of walk time].
 FROZEN_LIMIT_S = 5.0
-QUANTITIES = ("rss_mb", "map_ms", "control_ms", "objects")
+QUANTITIES = ("rss_mb", "map_ms", "map_cpu_ms", "control_ms", "control_cpu_ms", "objects")
 
 
 def resident_mb() -> float:
@@ -151,6 +152,7 @@ def run_soak(
     next_sample = wall_start + sample_seconds
     frames_seen = 0
     tick_ms: list[float] = []
+    tick_cpu_ms: list[float] = []
     sim_seconds = 0.0
     end_reason = ""
 
@@ -161,6 +163,7 @@ def run_soak(
         bus.publish(WalkCommand.TOPIC, laps.next_command(pose.x, pose.y, pose.yaw, t))
         robot.step(t, dt)
         tick_ms.append(1e3 * robot.control_seconds)
+        tick_cpu_ms.append(1e3 * robot.control_cpu_seconds)
         sim_seconds = t + dt
         if judge.should_stop(t + dt):
             frozen = judge.status.state is GaitState.FROZEN
@@ -176,16 +179,20 @@ def run_soak(
         new_frames = mapping.frames - frames_seen
         frames_seen = mapping.frames
         recent = list(mapping.update_ms)[-new_frames:] if new_frames > 0 else []
+        recent_cpu = list(mapping.update_cpu_ms)[-new_frames:] if new_frames > 0 else []
         sample = {
             "wall_minutes": (now - wall_start) / 60.0,
             "sim_seconds": t + dt,
             "laps": laps.laps,
             "rss_mb": resident_mb(),
             "map_ms": float(np.mean(recent)) if recent else math.nan,
+            "map_cpu_ms": float(np.mean(recent_cpu)) if recent_cpu else math.nan,
             "control_ms": float(np.mean(tick_ms)) if tick_ms else math.nan,
+            "control_cpu_ms": float(np.mean(tick_cpu_ms)) if tick_cpu_ms else math.nan,
             "objects": float(len(gc.get_objects())),
         }
         tick_ms.clear()
+        tick_cpu_ms.clear()
         samples.append(sample)
         if on_sample is not None:
             on_sample(sample)

@@ -78,6 +78,7 @@ def run_faults_bench(
     terrains: Sequence[str] | None = None,
     jobs: int = 1,
     on_run: Callable[[str], None] | None = None,
+    survey_seconds: float = 20.0,
 ) -> BenchReport:
     """Every fault class on every terrain (see ``run_fault_benchmark``)."""
     from footfall.reliability.faults_bench import (
@@ -93,6 +94,7 @@ def run_faults_bench(
         terrains=terrains or FAULT_TERRAINS,
         jobs=jobs,
         on_run=on_run,
+        survey_seconds=survey_seconds,
     )
     return BenchReport("faults", figures)
 

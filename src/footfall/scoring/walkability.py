@@ -116,6 +116,10 @@ def score_heights(
     """
     c = config or ScoreConfig()
     h = np.asarray(heights, dtype=np.float64)
+    if h.ndim != 2:
+        raise ConfigError(f"heights to score must be a 2-D grid, got shape {h.shape}")
+    if not (math.isfinite(resolution) and resolution > 0):
+        raise ConfigError(f"the grid's resolution must be positive, got {resolution}")
     known = np.isfinite(h)
     h0 = np.where(known, h, 0.0)
     slope, proximity, score = (np.empty_like(h0) for _ in range(3))

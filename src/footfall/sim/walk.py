@@ -142,6 +142,8 @@ class SimRobot:
         simulated_until: Controller time the physics has been stepped to [s].
         control_seconds: Wall time of the last tick's control graph (controller, servo,
             physics step) [s].
+        control_cpu_seconds: Its CPU time on this thread [s] (other processes on the
+            machine do not change it).
     """
 
     spec: HexapodSpec
@@ -156,6 +158,7 @@ class SimRobot:
     link: FaultyLink | None = None
     simulated_until: float = 0.0
     control_seconds: float = 0.0
+    control_cpu_seconds: float = 0.0
 
     @classmethod
     def build(
@@ -225,9 +228,10 @@ class SimRobot:
             self.backend.advance(t - self.simulated_until)
         if self.link is not None:
             self.link.advance(t)
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), time.thread_time()
         self.graph.step(t, dt)
         self.control_seconds = time.perf_counter() - t0
+        self.control_cpu_seconds = time.thread_time() - cpu0
         self.simulated_until = t + dt
         if self.camera is not None:
             self.camera.tick(t + dt)

@@ -1,0 +1,377 @@
+"""Faults between the nodes, and what the robot does about them: the fault spec and link,
+the pose guard, vertical drift compensation, late frames, stale sensors, walks through
+faults, bounded logs and a short soak."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from footfall.cli import main
+from footfall.control_loop import WalkLog
+from footfall.errors import ConfigError
+from footfall.mapping.drift import DriftConfig
+from footfall.mapping.height_map import HeightMap, HeightMapConfig
+from footfall.messages import DepthFrame, GaitStatus, MapUpdate, PoseEstimate, RobotState
+from footfall.nodes.mapping import MappingNode
+from footfall.nodes.pose_guard import PoseGuardNode
+from footfall.robot.planar import PlanarPose
+from footfall.runtime.bus import InProcessBus
+from footfall.runtime.faults import RAW_POSE_TOPIC, FaultSpec, FaultyLink, PoseJump
+from footfall.sensing.camera import PinholeCamera
+from footfall.sensing.pose import Pose
+
+CAMERA = PinholeCamera(60.0, 60.0, 39.5, 29.5, 80, 60)
+
+
+def camera_over_floor(x: float = 0.0, height: float = 0.4, pitch_deg: float = 40.0) -> Pose:
+    """An optical frame ``height`` over the floor at ``x``, pitched down (x right, y down)."""
+    p = math.radians(pitch_deg)
+    forward = np.array([math.cos(p), 0.0, -math.sin(p)])
+    right = np.array([0.0, -1.0, 0.0])
+    down = np.cross(forward, right)
+    rotation = Rotation.from_matrix(np.column_stack([right, down, forward]))
+    return Pose(np.array([x, 0.0, height]), rotation)
+
+
+def floor_depth(pose: Pose, camera: PinholeCamera = CAMERA) -> np.ndarray:
+    """Exact depth of the floor z = 0 seen from ``pose``."""
+    u, v = np.meshgrid(np.arange(camera.width), np.arange(camera.height))
+    rays = np.stack(
+        [(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], -1
+    )
+    z = pose.rotation.apply(rays.reshape(-1, 3))[:, 2].reshape(u.shape)
+    return np.where(z < -1e-6, pose.position[2] / -np.minimum(z, -1e-6), 0.0).astype(np.float32)
+
+
+# The spec --------------------------------------------------------------------------------
+def test_every_fault_parses():
+    spec = FaultSpec.parse(
+        "drop=0.3, delay=0.2,repeat=0.1,nan=0.05,drift=slam,jump=0.1:5@8,jump=0.05:2@3,"
+        "pose_loss=1.0@10,overrun=0.05"
+    )
+    assert (spec.drop, spec.delay_s, spec.repeat, spec.nan, spec.overrun) == (
+        0.3,
+        0.2,
+        0.1,
+        0.05,
+        0.05,
+    )
+    assert spec.drift is not None and spec.pose_loss == (1.0, 10.0)
+    assert spec.jumps == (PoseJump(0.1, 5.0, 8.0), PoseJump(0.05, 2.0, 3.0))
+    assert not FaultSpec.parse("").active and FaultSpec.parse("overrun=0.1").active
+
+
+@pytest.mark.parametrize(
+    ("text", "says"),
+    [
+        ("wobble=1", "unknown fault 'wobble'"),
+        ("drop=1.5", "drop=1.5"),
+        ("drop=nan", "not a finite number"),
+        ("drop", "name=value"),
+        ("drop=0.1,drop=0.2", "given twice"),
+        ("drift=gps", "'slam'"),
+        ("jump=0.1@8", "METRES:DEGREES@SECONDS"),
+        ("jump=0.1:5", "METRES:DEGREES@SECONDS"),
+        ("pose_loss=-1@3", "duration > 0"),
+        ("delay=abc", "not a number"),
+    ],
+)
+def test_bad_fault_specs_name_the_problem(text, says):
+    with pytest.raises(ConfigError, match=says.replace("(", r"\(").replace("?", r"\?")):
+        FaultSpec.parse(text)
+
+
+# The link --------------------------------------------------------------------------------
+class Tap:
+    """What reaches the bus behind a faulty link."""
+
+    def __init__(self, spec: str, seed: int = 0):
+        self.bus = InProcessBus()
+        self.link = FaultyLink(self.bus, FaultSpec.parse(spec), seed)
+        self.frames: list[DepthFrame] = []
+        self.poses: list[PoseEstimate] = []
+        self.sensor_side: list[DepthFrame] = []
+        self.bus.subscribe(DepthFrame.TOPIC, self.frames.append)
+        self.bus.subscribe(RAW_POSE_TOPIC, self.poses.append)
+        self.link.subscribe(DepthFrame.TOPIC, self.sensor_side.append)
+
+    def send(self, n: int, rate_hz: float = 15.0):
+        """Publish ``n`` frames and their poses through the link, at ``rate_hz``."""
+        for k in range(n):
+            t = k / rate_hz
+            self.link.advance(t)
+            pose = camera_over_floor(0.1 * t)
+            depth = np.full((6, 8), 1.0 + k, np.float32)
+            self.link.publish(DepthFrame.TOPIC, DepthFrame(t, depth, CAMERA, pose, sequence=k))
+            self.link.publish(RAW_POSE_TOPIC, PoseEstimate(t, pose, pose))
+
+
+@given(drop=st.floats(0.05, 0.6), seed=st.integers(0, 10_000))
+@settings(max_examples=20, deadline=None)
+def test_the_link_drops_the_fraction_asked_and_the_sensor_side_sees_all(drop, seed):
+    tap = Tap(f"drop={drop}", seed)
+    tap.send(600)
+    lost = 1 - len(tap.frames) / 600
+    assert abs(lost - drop) < 5 * math.sqrt(drop * (1 - drop) / 600)
+    assert len(tap.sensor_side) == 600 and len(tap.poses) == 600
+    assert tap.link.counts.frames_dropped == 600 - len(tap.frames)
+
+
+def test_late_frames_arrive_late_and_in_order():
+    tap = Tap("delay=0.2")
+    arrived: list[tuple[float, float]] = []
+    tap.bus.subscribe(DepthFrame.TOPIC, lambda f: arrived.append((f.stamp, tap.now)))
+    for k in range(30):
+        tap.now = k / 15.0
+        tap.link.advance(tap.now)
+        pose = camera_over_floor()
+        tap.link.publish(DepthFrame.TOPIC, DepthFrame(tap.now, np.ones((6, 8)), CAMERA, pose))
+    stamps = [s for s, _ in arrived]
+    assert stamps == sorted(stamps) and len(arrived) >= 25
+    assert all(0.2 - 1e-9 <= now - stamp < 0.2 + 1 / 15 for stamp, now in arrived)
+
+
+def test_repeated_frames_carry_the_previous_image_and_patches_cover_the_fraction():
+    tap = Tap("repeat=0.3,nan=0.1", seed=4)
+    tap.send(100)
+    repeated = [
+        k for k, f in enumerate(tap.frames[1:], 1) if f.depth[0, 0] == tap.frames[k - 1].depth[0, 0]
+    ]
+    assert tap.link.counts.frames_repeated > 10 and repeated
+    big = np.full((120, 160), 2.0, np.float32)
+    from footfall.runtime.faults import cover_with_patches
+
+    patched = cover_with_patches(big, 0.1, np.random.default_rng(0))
+    bad = ~np.isfinite(patched) | (patched == 0)
+    assert 0.1 <= bad.mean() < 0.2 and np.isnan(patched).any() and (patched == 0).any()
+
+
+def test_pose_loss_withholds_estimates_for_its_window():
+    tap = Tap("pose_loss=1.0@2")
+    tap.send(90)
+    stamps = np.array([p.stamp for p in tap.poses])
+    assert not np.any((stamps >= 2.0) & (stamps < 3.0))
+    assert np.any(stamps >= 3.0) and tap.link.counts.poses_lost == 15
+
+
+def test_a_jump_moves_every_later_estimate_rigidly_by_its_size():
+    tap = Tap("jump=0.1:5@2")
+    tap.send(60)
+    before = [p for p in tap.poses if p.stamp < 2.0]
+    after = [p for p in tap.poses if p.stamp >= 2.0]
+    first = after[0]
+    true = camera_over_floor(0.1 * first.stamp)
+    shift = first.camera_in_world.position - true.position
+    assert np.hypot(shift[0], shift[1]) == pytest.approx(0.1) and abs(shift[2]) < 1e-12
+    turn = (first.camera_in_world.rotation * true.rotation.inv()).magnitude()
+    assert math.degrees(turn) == pytest.approx(5.0)
+    for p in before:
+        np.testing.assert_allclose(
+            p.camera_in_world.position, camera_over_floor(0.1 * p.stamp).position
+        )
+    # The body moves with the camera: their relative pose is untouched.
+    rel = first.body_in_world.inverse().compose(first.camera_in_world)
+    np.testing.assert_allclose(rel.position, 0.0, atol=1e-12)
+
+
+# The pose guard --------------------------------------------------------------------------
+class Guarded:
+    """A pose guard fed by a robot walking level along x at 0.1 m/s: odometry from its
+    status, attitude from its IMU."""
+
+    def __init__(self):
+        self.bus = InProcessBus()
+        self.guard = PoseGuardNode(self.bus)
+        self.out: list[PoseEstimate] = []
+        self.bus.subscribe(PoseEstimate.TOPIC, self.out.append)
+
+    def walk(self, seconds: float, error: Pose | None = None, start: float = 0.0):
+        """Feed ``seconds`` of estimates from ``start`` on, each off by ``error``."""
+        for k in range(round(seconds * 15)):
+            t = start + k / 15.0
+            body = Pose(np.array([0.1 * t, 0.0, 0.2]), Rotation.identity())
+            odometry = PlanarPose(0.1 * t, 0.0, 0.0)
+            self.bus.publish(GaitStatus.TOPIC, _status(t, odometry))
+            zeros = np.zeros((6, 3))
+            imu = RobotState(t, zeros, zeros, Rotation.identity(), np.zeros(3))
+            self.bus.publish(RobotState.TOPIC, imu)
+            raw = body if error is None else error.compose(body)
+            self.bus.publish(RAW_POSE_TOPIC, PoseEstimate(t, raw, raw))
+
+
+def _status(t: float, pose: PlanarPose) -> GaitStatus:
+    from footfall.messages import GaitState, Mode
+
+    return GaitStatus(t, Mode.WALKING, GaitState.STEPPING, "", "", pose, 0.09, 0, 0, 0.0, 0)
+
+
+def test_the_guard_passes_estimates_that_agree_with_odometry():
+    g = Guarded()
+    g.walk(3.0)
+    assert g.guard.jumps == 0
+    np.testing.assert_allclose(g.out[-1].body_in_world.position, [0.1 * 44 / 15, 0.0, 0.2])
+
+
+@given(
+    distance=st.floats(0.05, 1.0),
+    angle=st.floats(3.0, 30.0),
+    axis=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(0.1, 1)),
+)
+@settings(max_examples=25, deadline=None)
+def test_the_guard_removes_a_jump_in_any_direction(distance, angle, axis):
+    """After a jump the guard's estimates stay on odometry (to a few millimetres)."""
+    g = Guarded()
+    g.walk(1.0)
+    a = np.asarray(axis) / np.linalg.norm(axis)
+    jump = Pose(np.array([distance, 0.0, 0.0]), Rotation.from_rotvec(a * math.radians(angle)))
+    g.walk(2.0, error=jump, start=1.0)
+    assert g.guard.jumps == 1
+    last = g.out[-1]
+    np.testing.assert_allclose(
+        last.body_in_world.position, [0.1 * (1 + 29 / 15), 0, 0.2], atol=0.01
+    )
+    assert last.body_in_world.rotation.magnitude() < math.radians(0.5)
+
+
+# Drift compensation ----------------------------------------------------------------------
+@pytest.mark.parametrize("offset", [0.01, -0.02, 0.025])
+def test_a_drifted_frame_is_registered_on_the_map_not_smeared_into_it(offset):
+    """A frame seen from a pose `offset` too high leaves the floor at 0 with compensation,
+    at `offset` without."""
+    maps = {
+        on: HeightMap(HeightMapConfig(size=96, drift=DriftConfig(enabled=on)), centre=(1.0, 0.0))
+        for on in (False, True)
+    }
+    true = camera_over_floor()
+    drifted = Pose(true.position + [0, 0, offset], true.rotation)
+    for on, m in maps.items():
+        m.integrate_depth(floor_depth(true), CAMERA, true)
+        stats = m.integrate_depth(floor_depth(true), CAMERA, drifted)
+        h = m.heights[m.known]
+        if on:
+            assert stats.vertical_offset_m == pytest.approx(offset, abs=1e-6)
+            assert np.abs(h).max() < 1e-6
+        else:
+            assert np.median(h) == pytest.approx(offset, abs=1e-6)
+
+
+def test_a_frame_whose_offset_jumps_is_set_aside_until_the_new_offset_holds():
+    config = DriftConfig(enabled=True)
+    m = HeightMap(HeightMapConfig(size=96, drift=config), centre=(1.0, 0.0))
+    true = camera_over_floor()
+    m.integrate_depth(floor_depth(true), CAMERA, true)
+    jumped = Pose(true.position + [0, 0, 0.1], true.rotation)
+    results = [m.integrate_depth(floor_depth(true), CAMERA, jumped) for _ in range(4)]
+    assert [r.inconsistent for r in results] == [True] * (config.settle_frames - 1) + [False] * (
+        5 - config.settle_frames
+    )
+    assert results[config.settle_frames - 1].settled
+    assert np.abs(m.heights[m.known]).max() < 1e-6  # never fused at the wrong height
+
+
+# Late frames and stale sensors -----------------------------------------------------------
+def test_a_late_frame_takes_its_own_pose_from_the_history():
+    bus = InProcessBus()
+    node = MappingNode(bus, HeightMapConfig(size=96), centre=(1.0, 0.0))
+    poses = [camera_over_floor(0.01 * k) for k in range(6)]
+    for k, pose in enumerate(poses):
+        bus.publish(PoseEstimate.TOPIC, PoseEstimate(k / 15, pose, pose))
+    late = DepthFrame(1 / 15, floor_depth(poses[1]), CAMERA, Pose.identity())
+    updates: list[MapUpdate] = []
+    bus.subscribe(MapUpdate.TOPIC, updates.append)
+    bus.publish(DepthFrame.TOPIC, late)
+    assert node.frames == 1 and node.frames_skipped_no_pose == 0 and updates
+    assert np.abs(node.height_map.heights[node.height_map.known]).max() < 1e-6
+
+
+def test_a_frozen_camera_is_set_aside_once_the_camera_moved():
+    bus = InProcessBus()
+    node = MappingNode(bus, HeightMapConfig(size=96), centre=(1.0, 0.0), reject_repeats=True)
+    image = floor_depth(camera_over_floor())
+    for k in range(4):
+        pose = camera_over_floor(0.02 * k)
+        bus.publish(PoseEstimate.TOPIC, PoseEstimate(k / 15, pose, pose))
+        bus.publish(DepthFrame.TOPIC, DepthFrame(k / 15, image, CAMERA, Pose.identity()))
+    assert node.frames == 1 and node.frames_repeated == 3
+
+
+def test_walk_log_rings_keep_the_latest_rows():
+    log = WalkLog.ring(3)
+    for k in range(10):
+        log.time.append(float(k))
+    assert list(log.time) == [7.0, 8.0, 9.0] and log.array("time").shape == (3,)
+    with pytest.raises(ConfigError):
+        WalkLog.ring(0)
+
+
+# Walks through faults --------------------------------------------------------------------
+def _walk(terrain: str, faults: str, seconds: float = 60.0, seed: int = 0):
+    from footfall.robot.spec import load_spec
+    from footfall.sim.walk import WalkSettings, simulate_walk
+
+    settings_ = WalkSettings(
+        terrain=terrain,
+        seconds=seconds,
+        blind=False,
+        seed=seed,
+        stop_at_goal=True,
+        faults=FaultSpec.parse(faults),
+    )
+    return simulate_walk(load_spec("default"), settings_)
+
+
+def test_a_pose_jump_on_cobblestones_is_caught_and_the_robot_gets_across():
+    """The issue's case: a 10 cm / 5 degree jump at 8 s used to put 21 feet on invalid cells."""
+    m = _walk("cobblestones", "jump=0.1:5@8", seed=2).metrics
+    assert m["pose_jumps_detected"] == 1 and m["faults"]["jumps"] == 1
+    assert m["reached_goal"] and not m["fell"] and m["invalid_footholds"] == 0
+
+
+def test_a_robot_that_loses_its_pose_stands_still_then_walks_on():
+    result = _walk("flat", "pose_loss=2.0@4", seconds=14.0)
+    m, log = result.metrics, result.log
+    assert m["stale_stops"] >= 1 and not m["fell"] and m["invalid_footholds"] == 0
+    t = log.array("time")
+    x = log.array("body_position_in_world")[:, 0]
+    standing = (t > 4.5 + 0.6) & (t < 6.0)
+    assert np.ptp(x[standing]) < 0.01  # stood still while the pose was stale
+    assert x[t > 13.5].mean() - x[(t > 6.0) & (t < 6.3)].mean() > 0.5  # walked on
+
+
+def test_the_walk_cli_refuses_a_bad_fault_spec(capsys):
+    assert main(["walk", "--faults", "drop=2", "--seconds", "1"]) != 0
+    captured = capsys.readouterr()
+    assert "drop=2" in captured.out + captured.err
+
+
+def test_bench_faults_and_soak_write_their_reports(tmp_path):
+    import json
+
+    out = tmp_path / "faults"
+    args = ["bench", "faults", "--seeds", "1", "--seconds", "2", "--survey-seconds", "2"]
+    args += ["--terrains", "flat", "--faults", "drop=0.3", "--jobs", "1", "--out", str(out)]
+    assert main(args) == 0
+    bench = json.loads((out / "bench.json").read_text())
+    (row,) = bench["results"]
+    assert {k: row[k] for k in ("fault", "terrain", "runs")} == {
+        "fault": "drop=0.3",
+        "terrain": "flat",
+        "runs": 1,
+    }
+    for key in ("falls", "invalid_footholds", "frozen", "recovered", "successes"):
+        assert key in row
+    assert {"falls", "invalid_footholds", "success_rate"} <= bench.keys()
+    assert bench["map_rmse"]["with_compensation_m"] > 0 and (out / "bench.png").stat().st_size
+    soak = tmp_path / "soak"
+    args = ["bench", "soak", "--minutes", "0.15", "--sample-seconds", "2", "--out", str(soak)]
+    assert main(args) == 0
+    figures = json.loads((soak / "soak.json").read_text())
+    assert len(figures["samples"]) >= 3 and figures["log_ticks_kept"] <= 2000
+    assert {"rss_mb", "map_cpu_ms", "control_cpu_ms", "objects"} <= set(figures["slope_per_minute"])
+    assert (soak / "soak.png").stat().st_size
