@@ -69,6 +69,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     faults.add_argument("--seeds", type=int, default=5, help="runs per fault class and terrain")
+    faults.add_argument("--first-seed", type=int, default=0, help="the seeds run from this one up")
     faults.add_argument("--seconds", type=float, default=90.0, help="longest walk in seconds")
     faults.add_argument(
         "--survey-seconds",
@@ -216,6 +217,7 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
             jobs=args.jobs,
             on_run=lambda label: progress.update(task, advance=1, description=label),
             survey_seconds=args.survey_seconds,
+            first_seed=args.first_seed,
         )
     paths = report.write(args.out)
     bench = report.to_json()

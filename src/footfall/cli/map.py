@@ -59,6 +59,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "noise averaged down over frames, for a recording)",
     )
     p.add_argument(
+        "--drift-compensation",
+        action="store_true",
+        help="register every frame vertically against the map before fusing it (takes out "
+        "a drifting pose's height error; see footfall bench faults)",
+    )
+    p.add_argument(
         "--max-cell-spread",
         type=float,
         default=None,
@@ -102,6 +108,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
         image_size=tuple(args.image_size),
         fusion=args.fusion,
         max_cell_spread=args.max_cell_spread,
+        drift_compensation=args.drift_compensation,
         tum=args.tum,
         intrinsics=tuple(args.intrinsics),
         up=tuple(args.up),

@@ -179,6 +179,16 @@ def run(args: argparse.Namespace, console: Console) -> int:
         "walk summary",
         [(label, format_value(metrics[key], fmt)) for label, key, fmt in SUMMARY],
     )
+    if "faults" in metrics:
+        injected = ", ".join(
+            f"{k.replace('_', ' ')} {v}" for k, v in metrics["faults"].items() if v
+        )
+        console.print(
+            f"Faults injected: {injected or 'none'}. Caught: {metrics['pose_jumps_detected']} "
+            f"pose jumps, {metrics['frames_inconsistent']} inconsistent frames, "
+            f"{metrics['frames_repeated']} repeated images; stood {metrics['stale_stops']} "
+            f"times for a stale pose or map; froze {metrics['freezes']} times."
+        )
     if metrics["reached_goal"]:
         console.print(
             f"[green]Reached the goal[/] with {metrics['invalid_footholds']} invalid footholds."

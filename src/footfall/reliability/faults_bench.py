@@ -129,10 +129,12 @@ def run_fault_benchmark(
     jobs: int = 1,
     on_run: Callable[[str], None] | None = None,
     survey_seconds: float = RMSE_SECONDS,
+    first_seed: int = 0,
 ) -> dict[str, object]:
     """Walk every fault class on every terrain ``seeds`` times, and survey the map error.
 
     Each survey walks ``survey_seconds`` under SLAM noise, without and with compensation.
+    The seeds are ``first_seed`` to ``first_seed + seeds - 1``.
 
     Returns:
         ``results`` rows (``fault``, ``spec``, ``terrain``, ``runs``, ``successes``,
@@ -159,18 +161,19 @@ def run_fault_benchmark(
             assert isinstance(job, tuple)
             on_run(" ".join(str(part) for part in job[:4]))
 
+    seed_range = range(first_seed, first_seed + seeds)
     walks: list[Job] = [
         (label, spec, terrain, seed, seconds)
         for label, spec in faults
         for terrain in terrains
-        for seed in range(seeds)
+        for seed in seed_range
     ]
     if not (math.isfinite(survey_seconds) and survey_seconds > 0):
         raise ConfigError(f"--survey-seconds must be positive, got {survey_seconds}")
     surveys = [
         (terrain, seed, compensate, survey_seconds)
         for terrain in RMSE_TERRAINS
-        for seed in range(seeds)
+        for seed in seed_range
         for compensate in (False, True)
     ]
     outcomes = _run_all(_walk, walks, jobs, progress)
@@ -178,7 +181,7 @@ def run_fault_benchmark(
     rows = []
     for label, spec in faults:
         for terrain in terrains:
-            runs = [outcomes[(label, spec, terrain, seed, seconds)] for seed in range(seeds)]
+            runs = [outcomes[(label, spec, terrain, seed, seconds)] for seed in seed_range]
             rows.append(
                 {
                     "fault": label,
@@ -200,6 +203,7 @@ def run_fault_benchmark(
     ]
     return {
         "seeds": seeds,
+        "first_seed": first_seed,
         "seconds": seconds,
         "results": rows,
         "falls": sum(r["falls"] for r in rows),

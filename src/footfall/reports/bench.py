@@ -79,6 +79,7 @@ def run_faults_bench(
     jobs: int = 1,
     on_run: Callable[[str], None] | None = None,
     survey_seconds: float = 20.0,
+    first_seed: int = 0,
 ) -> BenchReport:
     """Every fault class on every terrain (see ``run_fault_benchmark``)."""
     from footfall.reliability.faults_bench import (
@@ -95,6 +96,7 @@ def run_faults_bench(
         jobs=jobs,
         on_run=on_run,
         survey_seconds=survey_seconds,
+        first_seed=first_seed,
     )
     return BenchReport("faults", figures)
 

@@ -11,6 +11,7 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import ConfigError, DatasetError
+from footfall.mapping.drift import DriftConfig
 from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
 from footfall.reports import write_json
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
@@ -32,6 +33,8 @@ class MapRequest:
         image_size: Depth image width and height [px].
         fusion: Per-cell fusion rule; None: ``latest`` in simulation, ``variance`` (the
             sensor's noise averaged down over frames) for a recording.
+        drift_compensation: Register every frame vertically against the map before fusing
+            it (:mod:`footfall.mapping.drift`).
         max_cell_spread: In-frame height range of a cell, beyond the sensor's noise, above
             which it straddles an edge [m]; None for the score's default.
         tum: A TUM-layout sequence (or, with a camera pose, a depth PNG or a folder of
@@ -56,6 +59,7 @@ class MapRequest:
     image_size: tuple[int, int] = (640, 480)
     fusion: str | None = None
     max_cell_spread: float | None = None
+    drift_compensation: bool = False
     tum: Path | None = None
     intrinsics: tuple[float, float, float, float] = (525.0, 525.0, 319.5, 239.5)
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -173,7 +177,9 @@ def run_map(request: MapRequest, on_tick: Callable[[float], None] | None = None)
     """
     recorded = request.tum is not None
     fusion = request.fusion or ("variance" if recorded else "latest")
-    map_config = HeightMapConfig(fusion=fusion)
+    map_config = HeightMapConfig(
+        fusion=fusion, drift=DriftConfig(enabled=request.drift_compensation)
+    )
     score_config = score_config_for(request)
     from footfall.recording.session import Recorders
     from footfall.runtime.bus import InProcessBus
