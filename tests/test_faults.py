@@ -20,6 +20,7 @@ from footfall.mapping.height_map import HeightMap, HeightMapConfig
 from footfall.messages import DepthFrame, GaitStatus, MapUpdate, PoseEstimate, RobotState
 from footfall.nodes.mapping import MappingNode
 from footfall.nodes.pose_guard import PoseGuardNode
+from footfall.reliability.faults_bench import faulty_walk
 from footfall.robot.planar import PlanarPose
 from footfall.runtime.bus import InProcessBus
 from footfall.runtime.faults import RAW_POSE_TOPIC, FaultSpec, FaultyLink, PoseJump
@@ -311,30 +312,15 @@ def test_walk_log_rings_keep_the_latest_rows():
 
 
 # Walks through faults --------------------------------------------------------------------
-def _walk(terrain: str, faults: str, seconds: float = 60.0, seed: int = 0):
-    from footfall.robot.spec import load_spec
-    from footfall.sim.walk import WalkSettings, simulate_walk
-
-    settings_ = WalkSettings(
-        terrain=terrain,
-        seconds=seconds,
-        blind=False,
-        seed=seed,
-        stop_at_goal=True,
-        faults=FaultSpec.parse(faults),
-    )
-    return simulate_walk(load_spec("default"), settings_)
-
-
 def test_a_pose_jump_on_cobblestones_is_caught_and_the_robot_gets_across():
     """The issue's case: a 10 cm / 5 degree jump at 8 s used to put 21 feet on invalid cells."""
-    m = _walk("cobblestones", "jump=0.1:5@8", seed=2).metrics
+    m = faulty_walk("cobblestones", "jump=0.1:5@8", seed=2).metrics
     assert m["pose_jumps_detected"] == 1 and m["faults"]["jumps"] == 1
     assert m["reached_goal"] and not m["fell"] and m["invalid_footholds"] == 0
 
 
 def test_a_robot_that_loses_its_pose_stands_still_then_walks_on():
-    result = _walk("flat", "pose_loss=2.0@4", seconds=14.0)
+    result = faulty_walk("flat", "pose_loss=2.0@4", seconds=14.0)
     m, log = result.metrics, result.log
     assert m["stale_stops"] >= 1 and not m["fell"] and m["invalid_footholds"] == 0
     t = log.array("time")

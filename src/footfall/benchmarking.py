@@ -11,8 +11,9 @@ from __future__ import annotations
 import multiprocessing
 import statistics
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -24,6 +25,9 @@ from footfall.scoring.reference import score_grid_numpy
 from footfall.scoring.walkability import ScoreConfig, score_heights
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
+
+T = TypeVar("T")
+R = TypeVar("R")
 
 
 def median_ms(fn: Callable[[], object], repeats: int) -> float:
@@ -157,6 +161,30 @@ def _terrain_run(job: tuple[str, str, float, str, int, float]) -> dict[str, obje
     }
 
 
+def run_parallel(
+    function: Callable[[T], R], jobs: Sequence[T], workers: int, on_done: Callable[[T], None]
+) -> dict[T, R]:
+    """``function`` of every job, in ``workers`` processes (in this one for a single worker).
+
+    ``on_done`` is called with each job as it finishes (in completion order).
+    """
+    results: dict[T, R] = {}
+    if workers <= 1:
+        for job in jobs:
+            results[job] = function(job)
+            on_done(job)
+        return results
+    # Spawned, not forked: a fork of a process holding rendering contexts and thread pools
+    # can deadlock.
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        futures = {pool.submit(function, job): job for job in jobs}
+        for future in as_completed(futures):
+            results[futures[future]] = future.result()
+            on_done(futures[future])
+    return results
+
+
 def run_terrain_benchmark(
     seeds: int,
     seconds: float = 90.0,
@@ -184,25 +212,13 @@ def run_terrain_benchmark(
         for mode in ("planned", "blind")
     ]
     work = [(*config, seed, seconds) for config in configs for seed in range(seeds)]
-    runs: dict[tuple, dict[str, object]] = {}
 
-    def done(job: tuple, outcome: dict[str, object]) -> None:
-        runs[job] = outcome
+    def done(job: tuple) -> None:
         if on_run is not None:
             name, difficulty, value, mode, seed, _ = job
             on_run(f"{name} {difficulty}={value:g} {mode} seed {seed}")
 
-    if jobs <= 1:
-        for job in work:
-            done(job, _terrain_run(job))
-    else:
-        # Spawned, not forked: a fork of a process holding rendering contexts and thread
-        # pools can deadlock.
-        context = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-            futures = {pool.submit(_terrain_run, job): job for job in work}
-            for future in as_completed(futures):
-                done(futures[future], future.result())
+    runs = run_parallel(_terrain_run, work, jobs, done)
     rows = []
     for config in configs:
         outcomes = [runs[(*config, seed, seconds)] for seed in range(seeds)]

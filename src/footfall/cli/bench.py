@@ -120,6 +120,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     soak.set_defaults(handler=run_soak)
 
 
+def _progress(console: Console, unit: str = "") -> Progress:
+    """A progress bar with a label, counting ``unit`` (or only the time left)."""
+    count = [TextColumn(f"{{task.completed}}/{{task.total}} {unit}")] if unit else []
+    return Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        *count,
+        TimeRemainingColumn(),
+        console=console,
+    )
+
+
 def run_mapping(args: argparse.Namespace, console: Console) -> int:
     """Time the mapping and print the figures."""
     from footfall.reports.bench import run_mapping_bench
@@ -141,13 +153,7 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
     from footfall.benchmarking import terrain_benchmark_runs
     from footfall.reports.bench import run_terrain_bench
 
-    with Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total} walks"),
-        TimeRemainingColumn(),
-        console=console,
-    ) as progress:
+    with _progress(console, "walks") as progress:
         task = progress.add_task("walking", total=terrain_benchmark_runs(max(args.seeds, 0)))
         report = run_terrain_bench(
             args.seeds,
@@ -199,13 +205,7 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
 
     faults = parse_fault_classes(args.faults) if args.faults else FAULT_CLASSES
     terrains = tuple(args.terrains) if args.terrains else FAULT_TERRAINS
-    with Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total} runs"),
-        TimeRemainingColumn(),
-        console=console,
-    ) as progress:
+    with _progress(console, "runs") as progress:
         task = progress.add_task(
             "walking", total=fault_benchmark_runs(max(args.seeds, 0), faults, terrains)
         )
@@ -251,12 +251,7 @@ def run_soak(args: argparse.Namespace, console: Console) -> int:
     from footfall.reliability.soak import QUANTITIES
     from footfall.reports.bench import run_soak_bench
 
-    with Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TimeRemainingColumn(),
-        console=console,
-    ) as progress:
+    with _progress(console) as progress:
         task = progress.add_task("soaking", total=args.minutes)
         report = run_soak_bench(
             args.minutes,

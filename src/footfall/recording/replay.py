@@ -18,7 +18,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, fields, is_dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +37,7 @@ from footfall.recording.ros_decode import (
     pose_of,
 )
 from footfall.recording.ros_types import BODY_FRAME, CAMERA_FRAME, WORLD_FRAME, seconds
+from footfall.recording.writer import restored_settings
 from footfall.runtime.bus import InProcessBus
 from footfall.scoring.walkability import ScoreConfig
 from footfall.sensing.camera import PinholeCamera
@@ -209,31 +210,11 @@ class Replayer:
         if m is None:
             return HeightMapConfig(fusion=fusion or "variance"), ScoreConfig(), 1
 
-        def restore(kind: type, prefix: str) -> dict[str, object]:
-            defaults = kind()
-            values: dict[str, object] = {}
-            for f in fields(kind):
-                default = getattr(defaults, f.name)
-                if is_dataclass(default):
-                    nested = restore(type(default), f"{prefix}.{f.name}")
-                    if nested:
-                        values[f.name] = type(default)(**nested)
-                    continue
-                text = m.get(f"{prefix}.{f.name}")
-                if text is None:
-                    continue
-                cast = type(default)
-                if cast is bool:
-                    values[f.name] = text == "True"
-                else:
-                    values[f.name] = str(text) if issubclass(cast, str) else cast(float(text))
-            return values
-
         try:
-            map_values = restore(HeightMapConfig, "map")
+            map_values = restored_settings(HeightMapConfig, "map", m)
             if fusion is not None:
                 map_values["fusion"] = fusion
-            score = ScoreConfig(**restore(ScoreConfig, "score"))  # type: ignore[arg-type]
+            score = ScoreConfig(**restored_settings(ScoreConfig, "score", m))  # type: ignore[arg-type]
             config = HeightMapConfig(**map_values)  # type: ignore[arg-type]
             stride = int(m.get("stride", "1"))
         except (ValueError, TypeError) as exc:

@@ -65,6 +65,32 @@ def _flat(prefix: str, settings: object) -> dict[str, str]:
     return out
 
 
+def restored_settings(kind: type, prefix: str, metadata: dict[str, str]) -> dict[str, object]:
+    """The fields of settings ``kind`` that :func:`_flat` wrote under ``prefix``.
+
+    Raises:
+        ValueError: A value that does not parse as its field's type.
+    """
+    defaults = kind()
+    values: dict[str, object] = {}
+    for f in fields(kind):
+        default = getattr(defaults, f.name)
+        if is_dataclass(default):
+            nested = restored_settings(type(default), f"{prefix}.{f.name}", metadata)
+            if nested:
+                values[f.name] = type(default)(**nested)
+            continue
+        text = metadata.get(f"{prefix}.{f.name}")
+        if text is None:
+            continue
+        cast = type(default)
+        if cast is bool:
+            values[f.name] = text == "True"
+        else:
+            values[f.name] = str(text) if issubclass(cast, str) else cast(float(text))
+    return values
+
+
 def mapping_metadata(node: MappingNode) -> dict[str, str]:
     """A mapping node's settings and starting centre, for a replay to build the same map."""
     out = {**_flat("map", node.height_map.config), **_flat("score", node.score_config)}

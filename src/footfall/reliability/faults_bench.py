@@ -14,11 +14,10 @@ without vertical drift compensation (the survey of ``footfall map --noise slam``
 from __future__ import annotations
 
 import math
-import multiprocessing
 import statistics
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 
+from footfall.benchmarking import run_parallel
 from footfall.errors import ConfigError
 from footfall.runtime.faults import FaultSpec
 
@@ -42,12 +41,15 @@ RMSE_SECONDS = 20.0
 Job = tuple[str, str, str, int, float]
 
 
-def _walk(job: Job) -> dict[str, object]:
-    """One walk: ``(fault label, spec, terrain, seed, seconds)``."""
+def faulty_walk(terrain: str, spec: str, seed: int = 0, seconds: float = 90.0):
+    """The planned robot walking ``terrain`` to its goal with the faults ``spec``.
+
+    Returns:
+        The :class:`~footfall.sim.walk.WalkResult`.
+    """
     from footfall.robot.spec import load_spec
     from footfall.sim.walk import WalkSettings, simulate_walk
 
-    _, spec, terrain, seed, seconds = job
     settings = WalkSettings(
         terrain=terrain,
         seconds=seconds,
@@ -56,7 +58,13 @@ def _walk(job: Job) -> dict[str, object]:
         stop_at_goal=True,
         faults=FaultSpec.parse(spec),
     )
-    m = simulate_walk(load_spec("default"), settings).metrics
+    return simulate_walk(load_spec("default"), settings)
+
+
+def _walk(job: Job) -> dict[str, object]:
+    """One walk: ``(fault label, spec, terrain, seed, seconds)``."""
+    _, spec, terrain, seed, seconds = job
+    m = faulty_walk(terrain, spec, seed, seconds).metrics
     stopped = int(m.get("freezes", 0)) + int(m.get("stale_stops", 0))
     caught = int(m.get("pose_jumps_detected", 0)) + int(m.get("frames_inconsistent", 0))
     reached = bool(m["reached_goal"]) and not m["fell"]
@@ -86,25 +94,6 @@ def _map_error(job: tuple[str, int, bool, float]) -> float:
         map=HeightMapConfig(drift=DriftConfig(enabled=compensate)),
     )
     return float(simulate_mapping(load_spec("default"), settings).metrics["height_rmse_m"])
-
-
-def _run_all(
-    function: Callable, jobs: Sequence, workers: int, on_done: Callable[[object], None]
-) -> dict:
-    results = {}
-    if workers <= 1:
-        for job in jobs:
-            results[job] = function(job)
-            on_done(job)
-        return results
-    # Spawned, not forked: a fork of a process holding rendering contexts can deadlock.
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        futures = {pool.submit(function, job): job for job in jobs}
-        for future in as_completed(futures):
-            results[futures[future]] = future.result()
-            on_done(futures[future])
-    return results
 
 
 def fault_benchmark_runs(
@@ -176,8 +165,8 @@ def run_fault_benchmark(
         for seed in seed_range
         for compensate in (False, True)
     ]
-    outcomes = _run_all(_walk, walks, jobs, progress)
-    errors = _run_all(_map_error, surveys, jobs, progress)
+    outcomes = run_parallel(_walk, walks, jobs, progress)
+    errors = run_parallel(_map_error, surveys, jobs, progress)
     rows = []
     for label, spec in faults:
         for terrain in terrains:
