@@ -23,7 +23,8 @@ from footfall.nodes.pose_guard import PoseGuardNode
 from footfall.reliability.faults_bench import faulty_walk
 from footfall.robot.planar import PlanarPose
 from footfall.runtime.bus import InProcessBus
-from footfall.runtime.faults import RAW_POSE_TOPIC, FaultSpec, FaultyLink, PoseJump
+from footfall.runtime.fault_spec import FaultSpec, PoseJump
+from footfall.runtime.faults import RAW_POSE_TOPIC, FaultyLink
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
 

@@ -27,7 +27,7 @@ from footfall.planning.footholds import FootholdConfig, FootholdSearch
 from footfall.recording.reader import Recording
 from footfall.recording.replay import Replayer, ReplayRequest
 from footfall.robot.spec import load_spec
-from footfall.runtime.faults import FaultSpec
+from footfall.runtime.fault_spec import FaultSpec
 from footfall.scoring.walkability import ScoreConfig, score_map
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose

@@ -127,9 +127,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
             "(fraction of depth frames lost), delay=0.2 (seconds every frame arrives late), "
             "repeat=0.1 (fraction of frames repeating the previous image), nan=0.05 (fraction "
             "of each image covered by NaN and zero patches), drift=slam (SLAM-like pose drift "
-            "and jitter), jump=0.1:5@8 (the pose jumps 0.1 m and 5 degrees at t = 8 s; "
-            "repeatable), pose_loss=1.0@10 (no pose for 1 s from t = 10 s), overrun=0.05 "
-            "(fraction of control ticks running late by one to three periods)"
+            "and jitter; drift=slam:5 five times as much), jump=0.1:5@8 (the pose jumps 0.1 m "
+            "and 5 degrees at t = 8 s; repeatable), pose_loss=1.0@10 (no pose for 1 s from "
+            "t = 10 s), overrun=0.05 (fraction of control ticks running late by one to three "
+            "periods)"
         ),
     )
     add_recording_options(p)

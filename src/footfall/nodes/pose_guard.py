@@ -4,14 +4,27 @@ A visual SLAM system's estimate can jump (a relocalisation, a wrong loop closure
 thesis saw its height variations turn into artefacts of the height map (§9.2). Between two
 estimates the robot's own odometry knows how far it went: the walking controller's reference
 pose (integrated from the executed command, re-registered on every estimate it is given)
-and the IMU's gravity direction. The guard compares each raw estimate with that prediction;
-an estimate that moved farther than odometry and noise explain is a jump. The guard then
-re-registers: from that estimate on it applies the world-frame correction that puts the
-jumped estimate where odometry says the robot is, so the map is not smeared with two
-frames and the controller's world does not lurch. Corrections compose over several jumps.
+and the IMU's gravity direction. The guard compares how far each raw estimate moved from
+the last one with how far odometry moved; an estimate that moved farther than odometry and
+noise explain is a jump. The guard then re-registers: from that estimate on it applies the
+world-frame correction that puts the jumped estimate where the last one and odometry's
+motion say the robot is, so the map is not smeared with two frames and the controller's
+world does not lurch. Corrections compose over several jumps. Comparing motions, not poses,
+a slow disagreement between the estimate and odometry (a foot slipping, SLAM drifting) is
+never taken for a jump.
 
 A jump smaller than the allowance passes (a few centimetres, two degrees): the height map's
 drift compensation takes its vertical part.
+
+The guard also fuses what passes with the robot's own senses, as a legged robot's state
+estimator does: the body's tilt is the IMU's (gravity is a better reference for roll and
+pitch than a camera's estimate), and its horizontal position and heading move from the
+odometry's prediction towards the estimate by ``blend`` of the difference each estimate
+(a complementary filter with a time constant of about three seconds at 15 Hz: SLAM's jitter
+averages out, its slow drift is followed). The map then stays consistent over the seconds
+between seeing a cell and stepping on it, which a drifting estimate alone does not keep
+(at three times the default SLAM noise, following the estimate frame by frame puts feet in
+the cobblestones' grooves). Height is left to the map's drift compensation.
 """
 
 from __future__ import annotations
@@ -42,18 +55,25 @@ class PoseGuardConfig:
         position_rate_mps: Its growth [m/s].
         angle_deg: Heading and tilt allowance [degrees].
         angle_rate_dps: Its growth [degrees/s].
+        blend: Share of the difference between the estimate and odometry's prediction the
+            horizontal position and heading take per estimate (1: the estimate as is).
+        imu_tilt: Take the body's roll and pitch from the IMU.
     """
 
     position_m: float = 0.03
     position_rate_mps: float = 0.1
     angle_deg: float = 2.0
     angle_rate_dps: float = 2.0
+    blend: float = 0.02
+    imu_tilt: bool = True
 
     def __post_init__(self) -> None:
         for name in ("position_m", "position_rate_mps", "angle_deg", "angle_rate_dps"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ConfigError(f"pose guard {name} must be a positive number, got {value}")
+        if not 0.0 < self.blend <= 1.0:
+            raise ConfigError(f"pose guard blend must lie in (0, 1], got {self.blend}")
 
 
 def heading(rotation: Rotation) -> float:
@@ -94,8 +114,9 @@ class PoseGuardNode:
         self.config = config or PoseGuardConfig()
         self.correction = Pose.identity()  # world-frame: corrected = correction o raw
         self.jumps = 0
-        self._last: PoseEstimate | None = None
+        self._last: PoseEstimate | None = None  # the last corrected (unfused) estimate
         self._odometry: PlanarPose | None = None
+        self._odometry_then: PlanarPose | None = None  # odometry as the last one went out
         self._attitude: Rotation | None = None
         bus.subscribe(raw_topic, self._on_raw)
         bus.subscribe(GaitStatus.TOPIC, self._on_status, last=True)
@@ -113,52 +134,85 @@ class PoseGuardNode:
 
     def _on_raw(self, raw: PoseEstimate) -> None:
         estimate = self._corrected(raw)
-        last, odometry = self._last, self._odometry
-        if last is not None and odometry is not None and raw.stamp > last.stamp:
-            jump = self._residual(estimate, last, odometry, raw.stamp - last.stamp)
-            if jump is not None:
-                self._reregister(raw, estimate, last, odometry, jump)
-                estimate = self._corrected(raw)
+        last, odometry, then = self._last, self._odometry, self._odometry_then
+        published = estimate
+        if last is not None and odometry is not None and then is not None:
+            if raw.stamp > last.stamp:
+                predicted = self._predicted(last, then, odometry)
+                jump = self._residual(estimate, last, predicted, raw.stamp - last.stamp)
+                if jump is not None:
+                    self._reregister(raw, last, predicted, jump)
+                    estimate = self._corrected(raw)
+            published = self._fused(estimate, odometry)
         self._last = estimate
-        self.bus.publish(PoseEstimate.TOPIC, estimate)
+        self.bus.publish(PoseEstimate.TOPIC, published)
+        self._odometry_then = self._odometry  # the controller has taken it by now
+
+    @staticmethod
+    def _predicted(last: PoseEstimate, then: PlanarPose, now: PlanarPose) -> PlanarPose:
+        """Where the corrected estimates should be now: the last one moved as odometry did."""
+        c, s = math.cos(then.yaw), math.sin(then.yaw)
+        dx, dy = now.x - then.x, now.y - then.y
+        forward, left = c * dx + s * dy, -s * dx + c * dy  # the motion in the body's frame
+        yaw = heading(last.body_in_world.rotation)
+        c, s = math.cos(yaw), math.sin(yaw)
+        p = last.body_in_world.position
+        return PlanarPose(
+            float(p[0]) + c * forward - s * left,
+            float(p[1]) + s * forward + c * left,
+            wrap(yaw + wrap(now.yaw - then.yaw)),
+        )
+
+    def _fused(self, estimate: PoseEstimate, odometry: PlanarPose) -> PoseEstimate:
+        """The estimate blended with odometry in the plane, tilted as the IMU says."""
+        c = self.config
+        body = estimate.body_in_world
+        camera_in_body = body.inverse().compose(estimate.camera_in_world)
+        x = odometry.x + c.blend * (float(body.position[0]) - odometry.x)
+        y = odometry.y + c.blend * (float(body.position[1]) - odometry.y)
+        yaw = odometry.yaw + c.blend * wrap(heading(body.rotation) - odometry.yaw)
+        attitude = self._attitude if c.imu_tilt and self._attitude is not None else body.rotation
+        rotation = Rotation.from_euler("z", wrap(yaw - heading(attitude))) * attitude
+        fused = Pose(np.array([x, y, float(body.position[2])]), rotation)
+        return PoseEstimate(estimate.stamp, fused.compose(camera_in_body), fused)
 
     def _residual(
-        self, estimate: PoseEstimate, last: PoseEstimate, odometry: PlanarPose, elapsed: float
+        self, estimate: PoseEstimate, last: PoseEstimate, predicted: PlanarPose, elapsed: float
     ) -> str | None:
-        """Why ``estimate`` is a jump from what odometry predicts, or None when it is not."""
+        """Why ``estimate`` is a jump from the prediction, or None when it is not."""
         c = self.config
         body = estimate.body_in_world
         position_limit = c.position_m + c.position_rate_mps * elapsed
         angle_limit = math.radians(c.angle_deg + c.angle_rate_dps * elapsed)
-        horizontal = math.hypot(body.position[0] - odometry.x, body.position[1] - odometry.y)
+        horizontal = math.hypot(body.position[0] - predicted.x, body.position[1] - predicted.y)
         vertical = abs(float(body.position[2] - last.body_in_world.position[2]))
-        turn = abs(wrap(heading(body.rotation) - odometry.yaw))
-        tilt = tilt_between(body.rotation, self._attitude) if self._attitude is not None else 0.0
+        turn = abs(wrap(heading(body.rotation) - predicted.yaw))
+        # With the IMU's tilt taken, an error in tilt never reaches the map: only heading
+        # counts then.
+        tilt = (
+            tilt_between(body.rotation, self._attitude)
+            if self._attitude is not None and not c.imu_tilt
+            else 0.0
+        )
         if horizontal > position_limit or vertical > position_limit:
-            return f"moved {horizontal:.3f} m across and {vertical:.3f} m up from odometry"
+            return f"moved {horizontal:.3f} m across and {vertical:.3f} m up beyond odometry"
         if turn > angle_limit or tilt > angle_limit:
             return (
-                f"turned {math.degrees(turn):.1f} deg from odometry, tilted "
+                f"turned {math.degrees(turn):.1f} deg beyond odometry, tilted "
                 f"{math.degrees(tilt):.1f} deg from the IMU"
             )
         return None
 
     def _reregister(
-        self,
-        raw: PoseEstimate,
-        estimate: PoseEstimate,
-        last: PoseEstimate,
-        odometry: PlanarPose,
-        why: str,
+        self, raw: PoseEstimate, last: PoseEstimate, predicted: PlanarPose, why: str
     ) -> None:
-        """Take the correction that puts ``raw`` where odometry and the IMU say it is."""
-        body = estimate.body_in_world
-        attitude = self._attitude if self._attitude is not None else body.rotation
-        rotation = Rotation.from_euler("z", wrap(odometry.yaw - heading(attitude))) * attitude
-        predicted = Pose(
-            np.array([odometry.x, odometry.y, float(last.body_in_world.position[2])]), rotation
+        """Take the correction that puts ``raw`` where the prediction and the IMU say."""
+        attitude = self._attitude if self._attitude is not None else last.body_in_world.rotation
+        rotation = Rotation.from_euler("z", wrap(predicted.yaw - heading(attitude))) * attitude
+        target = Pose(
+            np.array([predicted.x, predicted.y, float(last.body_in_world.position[2])]), rotation
         )
-        self.correction = predicted.compose(raw.body_in_world.inverse())
+        self.correction = target.compose(raw.body_in_world.inverse())
         self.jumps += 1
         self.bus.publish(
             LogLine.TOPIC,

@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 
 from footfall.benchmarking import run_parallel
 from footfall.errors import ConfigError
-from footfall.runtime.faults import FaultSpec
+from footfall.runtime.fault_spec import FaultSpec
 
 # The fault classes and the strength each is walked with.
 FAULT_CLASSES: tuple[tuple[str, str], ...] = (

@@ -11,7 +11,7 @@ from footfall.messages import WalkCommand
 from footfall.motion.gait import GaitConfig
 from footfall.reports import write_json
 from footfall.robot.spec import HexapodSpec, load_spec
-from footfall.runtime.faults import FaultSpec
+from footfall.runtime.fault_spec import FaultSpec
 from footfall.sim.model import CameraMount
 from footfall.sim.terrain import Terrain, make_terrain
 from footfall.sim.truth import TrueScores

@@ -26,7 +26,8 @@ from footfall.planning.terrain_planner import TerrainPlanner, TerrainPlannerConf
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus, InProcessBus
-from footfall.runtime.faults import RAW_POSE_TOPIC, FaultSpec, FaultyLink, TickFaults
+from footfall.runtime.fault_spec import FaultSpec
+from footfall.runtime.faults import RAW_POSE_TOPIC, FaultyLink, TickFaults
 from footfall.runtime.scheduler import SimulatedScheduler, WallClockScheduler
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
 from footfall.sim.hexapod import MujocoHexapod
