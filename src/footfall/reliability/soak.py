@@ -1,8 +1,9 @@
 """``footfall bench soak``: walk laps for a long time and watch memory and per-frame time.
 
 The planned robot (camera, map, footholds) walks from a terrain's start to its goal, turns
-on the spot, walks back, and so on, for a given wall-clock time. The run keeps bounded
-logs (the per-tick record and the touchdowns as ring buffers). Every ``sample_seconds`` it
+on the spot, walks back, and so on, for a given wall-clock time (a robot that freezes for
+want of a foothold is turned on the spot to free it, as an operator would). The run keeps
+bounded logs (the per-tick record and the touchdowns as ring buffers). Every ``sample_seconds`` it
 samples the resident memory, the mean per-frame mapping time and per-tick control time
 since the last sample (wall and CPU time: the CPU time does not change when other
 processes share the machine), and the number of live Python objects. ``soak.json`` holds the
@@ -36,8 +37,10 @@ TURN_ON_SPOT = 0.35
 YAW_RATE = 0.3
 # An end of the lap counts as reached this close to it [m].
 END_TOLERANCE = 0.15
-# A soak that stays frozen this long has failed [s of walk time].
-FROZEN_LIMIT_S = 5.0
+# A frozen robot is turned on the spot this long to free it, as an operator would [s].
+UNFREEZE_TURN_S = 2.0
+# A soak that stays frozen this long, turning or not, has failed [s of walk time].
+FROZEN_LIMIT_S = 30.0
 QUANTITIES = ("rss_mb", "map_ms", "map_cpu_ms", "control_ms", "control_cpu_ms", "objects")
 
 
@@ -67,10 +70,24 @@ class LapTask:
     ends: tuple[np.ndarray, np.ndarray]
     command: WalkCommand
     laps: int = 0
+    unfreezes: int = 0
     _target: int = 1
+    _turn_until: float = -math.inf
 
-    def next_command(self, x: float, y: float, yaw: float, t: float) -> WalkCommand:
-        """The command for a body at ``(x, y, yaw)`` at time ``t``."""
+    def next_command(
+        self, x: float, y: float, yaw: float, t: float, frozen: bool = False
+    ) -> WalkCommand:
+        """The command for a body at ``(x, y, yaw)`` at time ``t``.
+
+        A frozen robot (no foothold ahead) gets a turn on the spot for ``UNFREEZE_TURN_S``:
+        a new command it resumes on; it then heads for its end again.
+        """
+        height = self.command.body_height
+        if frozen and t >= self._turn_until:
+            self.unfreezes += 1
+            self._turn_until = t + UNFREEZE_TURN_S
+        if t < self._turn_until:
+            return WalkCommand(speed=0.0, body_height=height, yaw_rate=YAW_RATE, stamp=t)
         target = self.ends[self._target]
         if math.hypot(target[0] - x, target[1] - y) < END_TOLERANCE:
             self._target = 1 - self._target
@@ -78,7 +95,6 @@ class LapTask:
             target = self.ends[self._target]
         heading = math.atan2(target[1] - y, target[0] - x)
         error = math.atan2(math.sin(heading - yaw), math.cos(heading - yaw))
-        height = self.command.body_height
         if abs(error) > TURN_ON_SPOT:
             return WalkCommand(
                 speed=0.0, body_height=height, yaw_rate=math.copysign(YAW_RATE, error), stamp=t
@@ -160,7 +176,8 @@ def run_soak(
         nonlocal next_sample, frames_seen, end_reason, sim_seconds
         assert judge.status is not None
         pose = judge.status.body_pose
-        bus.publish(WalkCommand.TOPIC, laps.next_command(pose.x, pose.y, pose.yaw, t))
+        frozen = judge.status.state is GaitState.FROZEN
+        bus.publish(WalkCommand.TOPIC, laps.next_command(pose.x, pose.y, pose.yaw, t, frozen))
         robot.step(t, dt)
         tick_ms.append(1e3 * robot.control_seconds)
         tick_cpu_ms.append(1e3 * robot.control_cpu_seconds)
@@ -208,6 +225,7 @@ def run_soak(
         "sample_seconds": sample_seconds,
         "window_minutes": window,
         "laps": laps.laps,
+        "unfreezes": laps.unfreezes,
         "sim_seconds": sim_seconds,
         "fell": end_reason == "the robot fell",
         "ended_early": end_reason,
