@@ -19,12 +19,14 @@ drift compensation takes its vertical part.
 The guard also fuses what passes with the robot's own senses, as a legged robot's state
 estimator does: the body's tilt is the IMU's (gravity is a better reference for roll and
 pitch than a camera's estimate), and its horizontal position and heading move from the
-odometry's prediction towards the estimate by ``blend`` of the difference each estimate
-(a complementary filter with a time constant of about three seconds at 15 Hz: SLAM's jitter
-averages out, its slow drift is followed). The map then stays consistent over the seconds
-between seeing a cell and stepping on it, which a drifting estimate alone does not keep
-(at three times the default SLAM noise, following the estimate frame by frame puts feet in
-the cobblestones' grooves). Height is left to the map's drift compensation.
+odometry's prediction towards the estimate by a gain each estimate. The gain is the steady
+Kalman gain of a random walk (odometry's error per estimate, ``odometry_noise_m``) measured
+by the estimate, whose noise the guard measures as it goes (the scatter of the estimates'
+motion about odometry's): a clean estimate is taken almost as is, a jittery one is averaged
+over many frames while its slow drift is still followed. The map then stays consistent
+over the seconds between seeing a cell and stepping on it (at three times the default SLAM
+noise, following the estimate frame by frame puts feet in the cobblestones' grooves).
+Height is left to the map's drift compensation.
 """
 
 from __future__ import annotations
@@ -55,8 +57,9 @@ class PoseGuardConfig:
         position_rate_mps: Its growth [m/s].
         angle_deg: Heading and tilt allowance [degrees].
         angle_rate_dps: Its growth [degrees/s].
-        blend: Share of the difference between the estimate and odometry's prediction the
-            horizontal position and heading take per estimate (1: the estimate as is).
+        odometry_noise_m: Odometry's horizontal error per estimate [m], for the gain.
+        min_gain: The smallest share of the estimate taken per estimate.
+        noise_memory: Estimates over which the estimate's noise is averaged.
         imu_tilt: Take the body's roll and pitch from the IMU.
     """
 
@@ -64,7 +67,9 @@ class PoseGuardConfig:
     position_rate_mps: float = 0.1
     angle_deg: float = 2.0
     angle_rate_dps: float = 2.0
-    blend: float = 0.02
+    odometry_noise_m: float = 0.0003
+    min_gain: float = 0.01
+    noise_memory: int = 20
     imu_tilt: bool = True
 
     def __post_init__(self) -> None:
@@ -72,8 +77,14 @@ class PoseGuardConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ConfigError(f"pose guard {name} must be a positive number, got {value}")
-        if not 0.0 < self.blend <= 1.0:
-            raise ConfigError(f"pose guard blend must lie in (0, 1], got {self.blend}")
+        if not (math.isfinite(self.odometry_noise_m) and self.odometry_noise_m > 0):
+            raise ConfigError(
+                f"pose guard odometry_noise_m must be positive, got {self.odometry_noise_m}"
+            )
+        if not 0.0 < self.min_gain <= 1.0:
+            raise ConfigError(f"pose guard min_gain must lie in (0, 1], got {self.min_gain}")
+        if self.noise_memory < 1:
+            raise ConfigError(f"pose guard noise_memory must be >= 1, got {self.noise_memory}")
 
 
 def heading(rotation: Rotation) -> float:
@@ -118,6 +129,8 @@ class PoseGuardNode:
         self._odometry: PlanarPose | None = None
         self._odometry_then: PlanarPose | None = None  # odometry as the last one went out
         self._attitude: Rotation | None = None
+        self._scatter = 0.0  # mean square of the estimates' motion about odometry's [m^2]
+        self.gain = 1.0
         bus.subscribe(raw_topic, self._on_raw)
         bus.subscribe(GaitStatus.TOPIC, self._on_status, last=True)
         bus.subscribe(RobotState.TOPIC, self._on_state, last=True)
@@ -143,6 +156,8 @@ class PoseGuardNode:
                 if jump is not None:
                     self._reregister(raw, last, predicted, jump)
                     estimate = self._corrected(raw)
+                else:
+                    self._measure(estimate, predicted)
             published = self._fused(estimate, odometry)
         self._last = estimate
         self.bus.publish(PoseEstimate.TOPIC, published)
@@ -163,14 +178,27 @@ class PoseGuardNode:
             wrap(yaw + wrap(now.yaw - then.yaw)),
         )
 
+    def _measure(self, estimate: PoseEstimate, predicted: PlanarPose) -> None:
+        """Update the estimate's measured noise, and the gain it gives."""
+        c = self.config
+        p = estimate.body_in_world.position
+        square = 0.5 * ((float(p[0]) - predicted.x) ** 2 + (float(p[1]) - predicted.y) ** 2)
+        self._scatter += (square - self._scatter) / c.noise_memory
+        q = c.odometry_noise_m**2
+        # The motion between two estimates carries two of their errors and one of odometry's.
+        r = max(0.5 * (self._scatter - q), 0.0)
+        gain = 1.0 if r <= 1e-3 * q else (-q + math.sqrt(q * q + 4.0 * q * r)) / (2.0 * r)
+        self.gain = min(max(gain, c.min_gain), 1.0)
+
     def _fused(self, estimate: PoseEstimate, odometry: PlanarPose) -> PoseEstimate:
         """The estimate blended with odometry in the plane, tilted as the IMU says."""
         c = self.config
         body = estimate.body_in_world
         camera_in_body = body.inverse().compose(estimate.camera_in_world)
-        x = odometry.x + c.blend * (float(body.position[0]) - odometry.x)
-        y = odometry.y + c.blend * (float(body.position[1]) - odometry.y)
-        yaw = odometry.yaw + c.blend * wrap(heading(body.rotation) - odometry.yaw)
+        k = self.gain
+        x = odometry.x + k * (float(body.position[0]) - odometry.x)
+        y = odometry.y + k * (float(body.position[1]) - odometry.y)
+        yaw = odometry.yaw + k * wrap(heading(body.rotation) - odometry.yaw)
         attitude = self._attitude if c.imu_tilt and self._attitude is not None else body.rotation
         rotation = Rotation.from_euler("z", wrap(yaw - heading(attitude))) * attitude
         fused = Pose(np.array([x, y, float(body.position[2])]), rotation)
