@@ -193,8 +193,16 @@ class Guarded:
         self.out: list[PoseEstimate] = []
         self.bus.subscribe(PoseEstimate.TOPIC, self.out.append)
 
-    def walk(self, seconds: float, error: Pose | None = None, start: float = 0.0):
-        """Feed ``seconds`` of estimates from ``start`` on, each off by ``error``."""
+    def walk(
+        self,
+        seconds: float,
+        error: Pose | None = None,
+        start: float = 0.0,
+        jitter_m: float = 0.0,
+    ):
+        """Feed ``seconds`` of estimates from ``start`` on, each off by ``error`` and by
+        horizontal white noise of ``jitter_m``."""
+        rng = np.random.default_rng(7)
         for k in range(round(seconds * 15)):
             t = start + k / 15.0
             body = Pose(np.array([0.1 * t, 0.0, 0.2]), Rotation.identity())
@@ -204,6 +212,9 @@ class Guarded:
             imu = RobotState(t, zeros, zeros, Rotation.identity(), np.zeros(3))
             self.bus.publish(RobotState.TOPIC, imu)
             raw = body if error is None else error.compose(body)
+            if jitter_m:
+                noise = np.append(rng.normal(0.0, jitter_m, 2), 0.0)
+                raw = Pose(raw.position + noise, raw.rotation)
             self.bus.publish(RAW_POSE_TOPIC, PoseEstimate(t, raw, raw))
 
 
@@ -218,6 +229,17 @@ def test_the_guard_passes_estimates_that_agree_with_odometry():
     g.walk(3.0)
     assert g.guard.jumps == 0
     np.testing.assert_allclose(g.out[-1].body_in_world.position, [0.1 * 44 / 15, 0.0, 0.2])
+
+
+def test_the_guard_takes_a_clean_estimate_and_averages_a_jittery_one():
+    clean, jittery = Guarded(), Guarded()
+    clean.walk(4.0)
+    jittery.walk(4.0, jitter_m=0.006)
+    assert clean.guard.gain > 0.9
+    assert 0.01 <= jittery.guard.gain < 0.1 and jittery.guard.jumps == 0
+    late = [p for p in jittery.out if p.stamp > 2.0]
+    errors = [p.body_in_world.position[1] for p in late]  # the truth is y = 0
+    assert np.std(errors) < 0.3 * 0.006
 
 
 @given(
