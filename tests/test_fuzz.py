@@ -412,3 +412,34 @@ def test_a_crafted_lzf_stream_never_reads_past_its_end():
 def test_values_the_fuzzing_found_are_refused_by_name(build, says):
     with pytest.raises(FootfallError, match=says):
         build()
+
+
+def test_malformed_recording_metadata_is_a_dataset_error(tmp_path):
+    """Regression: a garbled footfall/mapping record raised ValueError from float()."""
+    from footfall.errors import DatasetError
+    from footfall.recording.session import Recorders
+    from footfall.reports.walk import WalkRequest, prepare_walk
+    from footfall.runtime.bus import InProcessBus
+    from footfall.sim.walk import simulate_walk
+
+    path = tmp_path / "bad.mcap"
+    job = prepare_walk(WalkRequest(terrain="flat", seconds=0.3, image_size=(64, 48)))
+    garbled = {"footfall/mapping": {"map.resolution": "\x00.0", "centre_x": "0", "centre_y": "0"}}
+    with Recorders(path, metadata=garbled) as recorders:
+        simulate_walk(job.spec, job.settings, bus=recorders.attach(InProcessBus()))
+    with pytest.raises(DatasetError, match="malformed footfall/mapping metadata"):
+        Replayer(ReplayRequest(path, fast=True)).run()
+
+
+def test_a_robot_description_that_is_not_text_is_refused(tmp_path):
+    path = tmp_path / "robot.toml"
+    path.write_bytes(b"\xff\xfe name = 1")
+    with pytest.raises(FootfallError, match="not UTF-8"):
+        load_spec(path)
+
+
+def test_scoring_a_grid_of_zero_resolution_is_refused():
+    from footfall.scoring.walkability import score_heights
+
+    with pytest.raises(FootfallError, match="resolution"):
+        score_heights(np.zeros((4, 4)), 0.0)
