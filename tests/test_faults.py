@@ -375,6 +375,7 @@ def test_bench_faults_and_soak_write_their_reports(tmp_path):
     }
     for key in ("falls", "invalid_footholds", "frozen", "recovered", "successes"):
         assert key in row
+    assert row["failed_seeds"] == ([] if row["successes"] == 1 else [0])
     assert {"falls", "invalid_footholds", "success_rate"} <= bench.keys()
     assert bench["map_rmse"]["with_compensation_m"] > 0 and (out / "bench.png").stat().st_size
     soak = tmp_path / "soak"

@@ -127,7 +127,8 @@ def run_fault_benchmark(
 
     Returns:
         ``results`` rows (``fault``, ``spec``, ``terrain``, ``runs``, ``successes``,
-        ``falls``, ``invalid_footholds``, ``frozen``, ``recovered``, ``wall_seconds``),
+        ``falls``, ``invalid_footholds``, ``frozen``, ``recovered``, ``failed_seeds``,
+        ``wall_seconds``),
         totals ``falls``, ``invalid_footholds`` and ``success_rate``, and ``map_rmse`` with
         the survey's mean height RMSE without and with drift compensation.
     """
@@ -182,6 +183,9 @@ def run_fault_benchmark(
                     "invalid_footholds": sum(int(r["invalid_footholds"]) for r in runs),
                     "frozen": sum(bool(r["frozen"]) for r in runs),
                     "recovered": sum(bool(r["recovered"]) for r in runs),
+                    "failed_seeds": [
+                        seed for seed, r in zip(seed_range, runs, strict=True) if not r["success"]
+                    ],
                     "wall_seconds": float(sum(float(r["wall_seconds"]) for r in runs)),
                 }
             )
