@@ -51,6 +51,25 @@ def floor_depth(pose: Pose, camera: PinholeCamera = CAMERA) -> np.ndarray:
     return np.where(z < -1e-6, pose.position[2] / -np.minimum(z, -1e-6), 0.0).astype(np.float32)
 
 
+def blocks_depth(pose: Pose, camera: PinholeCamera = CAMERA) -> np.ndarray:
+    """Depth of a floor with 5 cm high blocks on a 0.2 m chequer seen from ``pose`` (the
+    blocks' tops; a ray that would meet a side gives no return)."""
+    u, v = np.meshgrid(np.arange(camera.width), np.arange(camera.height))
+    rays = np.stack(
+        [(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], -1
+    )
+    world = pose.rotation.apply(rays.reshape(-1, 3)).reshape(*u.shape, 3)
+    down = np.minimum(world[..., 2], -1e-6)
+    depth = np.zeros(u.shape)
+    for height in (0.05, 0.0):  # a ray that meets a top stops there
+        t = (height - pose.position[2]) / down
+        x, y = pose.position[0] + t * world[..., 0], pose.position[1] + t * world[..., 1]
+        on_block = (np.floor(x / 0.2) + np.floor(y / 0.2)) % 2 == 0
+        hit = (world[..., 2] < -1e-6) & (on_block == (height > 0.0)) & (depth == 0.0)
+        depth = np.where(hit, t, depth)
+    return depth.astype(np.float32)
+
+
 # The spec --------------------------------------------------------------------------------
 def test_every_fault_parses():
     spec = FaultSpec.parse(
@@ -263,6 +282,62 @@ def test_the_guard_removes_a_jump_in_any_direction(distance, angle, axis):
     assert last.body_in_world.rotation.magnitude() < math.radians(0.5)
 
 
+def test_a_frame_fits_the_map_at_its_own_pose_and_not_beside_it():
+    m = HeightMap(HeightMapConfig(size=96, drift=DriftConfig(enabled=True)), centre=(1.0, 0.0))
+    true = camera_over_floor()
+    m.integrate_depth(blocks_depth(true), CAMERA, true)
+    image = blocks_depth(camera_over_floor(0.03))
+    assert m.misfit(image, CAMERA, camera_over_floor(0.03)) < 5e-4
+    assert m.misfit(image, CAMERA, camera_over_floor(0.09)) > 0.01  # 6 cm out
+    assert m.misfit(np.zeros_like(image), CAMERA, true) != m.misfit(image, CAMERA, true)
+
+
+class MappedGuard(Guarded):
+    """The guard beside a mapping node, a camera over blocks moving with the body."""
+
+    def __init__(self):
+        super().__init__()
+        self.mapping = MappingNode(
+            self.bus, HeightMapConfig(size=128, drift=DriftConfig(enabled=True)), centre=(0.5, 0)
+        )
+
+    def step(self, t: float, body_x: float, odometry_x: float, estimate_x: float) -> None:
+        """One frame: the body at ``body_x``, odometry and the estimate where they say."""
+        self.bus.publish(GaitStatus.TOPIC, _status(t, PlanarPose(odometry_x, 0.0, 0.0)))
+        zeros = np.zeros((6, 3))
+        self.bus.publish(
+            RobotState.TOPIC, RobotState(t, zeros, zeros, Rotation.identity(), zeros[0])
+        )
+        image = blocks_depth(camera_over_floor(body_x))
+        self.bus.publish(DepthFrame.TOPIC, DepthFrame(t, image, CAMERA, Pose.identity()))
+        body = Pose(np.array([estimate_x, 0.0, 0.2]), Rotation.identity())
+        self.bus.publish(RAW_POSE_TOPIC, PoseEstimate(t, camera_over_floor(estimate_x), body))
+
+
+@pytest.mark.parametrize("slip", [True, False], ids=["the-robot-slipped", "the-estimate-jumped"])
+def test_the_map_tells_a_slip_from_a_jump(slip):
+    """Odometry says 0.1 m/s; at 1 s either the body lurches 6 cm ahead (a slip: the
+    estimate follows it, and so do the images) or the estimate alone jumps 6 cm. The guard
+    suspects a jump both times; the map's verdict undoes the re-registration only for the
+    slip, and its frames are fused where they belong."""
+    g = MappedGuard()
+    for k in range(30):
+        t = k / 15.0
+        odometry = 0.1 * t
+        lurch = 0.06 if t >= 1.0 else 0.0
+        body = odometry + (lurch if slip else 0.0)
+        g.step(t, body, odometry, odometry + lurch)
+    assert g.guard.refuted == (1 if slip else 0)
+    assert g.guard.jumps == (0 if slip else 1)
+    assert g.mapping.frames_inconsistent == 0
+    h = g.mapping.height_map
+    # The map stays registered on the blocks: every known cell at 0 or 5 cm.
+    heights = h.heights[h.known]
+    assert np.all(np.minimum(np.abs(heights), np.abs(heights - 0.05)) < 0.006)
+    end = 0.1 * 29 / 15 + 0.06 if slip else 0.1 * 29 / 15
+    assert g.out[-1].body_in_world.position[0] == pytest.approx(end, abs=0.005)
+
+
 # Drift compensation ----------------------------------------------------------------------
 @pytest.mark.parametrize("offset", [0.01, -0.02, 0.025])
 def test_a_drifted_frame_is_registered_on_the_map_not_smeared_into_it(offset):
@@ -340,6 +415,16 @@ def test_a_pose_jump_on_cobblestones_is_caught_and_the_robot_gets_across():
     m = faulty_walk("cobblestones", "jump=0.1:5@8", seed=2).metrics
     assert m["pose_jumps_detected"] == 1 and m["faults"]["jumps"] == 1
     assert m["reached_goal"] and not m["fell"] and m["invalid_footholds"] == 0
+
+
+def test_a_foot_retargeted_as_it_lands_is_not_dragged_and_a_slip_is_not_a_jump():
+    """A case the fault benchmark found: with 30 % of frames lost, a new map moved a
+    foot's target 14 cm as it was landing; the stance foot used to be dragged there, the
+    body lurched, the guard took the true estimate for a jump and the map went out of
+    register (8 invalid footholds, frozen). Now the step waits for the foot."""
+    m = faulty_walk("cobblestones", "drop=0.3", seed=4).metrics
+    assert m["reached_goal"] and not m["fell"] and m["invalid_footholds"] == 0
+    assert m["stance_slip_max_m"] < 0.01 and m["frames_inconsistent"] == 0
 
 
 def test_a_robot_that_loses_its_pose_stands_still_then_walks_on():

@@ -137,6 +137,27 @@ def test_retarget_keeps_the_foot_where_it_was():
     np.testing.assert_allclose(flow.position(0.3), here, atol=1e-12)
 
 
+@pytest.mark.parametrize("kind", ["flow", "polynomial"])
+def test_a_lengthened_swing_keeps_the_foot_and_lands_on_time(kind):
+    """A late re-target with a new duration: the foot stays put at that instant, moves on
+    without a jump, and reaches the new target exactly at the new end (not before)."""
+    swing = (
+        FlowSwing([0.0, 0.0, 0.0], [STRIDE, 0.0, 0.0], 0.8, THESIS)
+        if kind == "flow"
+        else PolynomialArcSwing([0.0, 0.0, 0.0], [STRIDE, 0.0, 0.0], 0.8, apex_height=0.05)
+    )
+    t = 0.78  # nearly down
+    here = swing.position(t)
+    target = np.array([STRIDE + 0.12, 0.04, 0.01])
+    swing.retarget(target, t, duration=1.2)
+    assert swing.duration == 1.2
+    np.testing.assert_allclose(swing.position(t), here, atol=1e-9)
+    path = np.array([swing.position(u) for u in np.linspace(t, 1.2, 400)])
+    assert np.max(np.linalg.norm(np.diff(path, axis=0), axis=1)) < 0.005  # no jump
+    np.testing.assert_allclose(swing.position(1.2), target, atol=1e-9)
+    assert np.linalg.norm(swing.position(1.0) - target) > 0.01
+
+
 def test_height_cap_counts_from_lift_off_not_from_mid_air():
     """A capped swing re-planned in mid-air still stays under lift-off height + cap."""
     config = FlowConfig(max_height=0.06)

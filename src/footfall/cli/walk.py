@@ -186,7 +186,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
         )
         console.print(
             f"Faults injected: {injected or 'none'}. Caught: {metrics['pose_jumps_detected']} "
-            f"pose jumps, {metrics['frames_inconsistent']} inconsistent frames, "
+            f"pose jumps ({metrics['pose_jumps_refuted']} more suspected and refuted by the "
+            f"map), {metrics['frames_inconsistent']} inconsistent frames, "
             f"{metrics['frames_repeated']} repeated images; stood {metrics['stale_stops']} "
             f"times for a stale pose or map; froze {metrics['freezes']} times."
         )

@@ -65,6 +65,8 @@ _RULE_CODES = {
 
 # The largest world coordinate a map window may be centred on [m] (cell indices stay exact).
 MAX_COORDINATE = 1e7
+# A cell's height difference counts at most this much in a frame's misfit [m].
+MISFIT_CAP_M = 0.05
 
 
 @dataclass(frozen=True)
@@ -338,36 +340,8 @@ class HeightMap:
         Raises:
             DepthImageError: On a malformed image.
         """
-        d = camera.depth_in_metres(depth, depth_scale)
-        if stride < 1:
-            raise ConfigError(f"stride must be >= 1, got {stride}")
         counts = np.zeros(kernels.N_COUNTS, dtype=np.int64)
-        n_touched = kernels.bin_depth(
-            d,
-            camera.scale_for(d, depth_scale),
-            camera.units_per_metre_for(d, depth_scale),
-            stride,
-            camera.fx,
-            camera.fy,
-            camera.cx,
-            camera.cy,
-            camera.min_range,
-            camera.max_range,
-            camera_pose.rotation.as_matrix(),
-            camera_pose.position,
-            self._inv_res,
-            self._origin_code(),
-            self._frame_h,
-            self._frame_lo,
-            self._frame_r2,
-            self._frame_sum,
-            self._frame_n,
-            not camera.noise.is_ideal,
-            self._stamp,
-            self._next_frame(),
-            self._touched,
-            counts,
-        )
+        n_touched = self._bin(depth, camera, camera_pose, depth_scale, stride, counts)
         registration = None
         if self.config.drift.enabled:
             registration = self._register(n_touched, camera.noise.is_ideal)
@@ -383,12 +357,94 @@ class HeightMap:
             return stats
         return replace(stats, vertical_offset_m=registration.offset_m, settled=registration.settled)
 
-    def _register(self, n_touched: int, ideal: bool) -> Registration:
-        """Measure the frame's vertical offset against the map and take it out of the frame."""
+    def _bin(
+        self,
+        depth: npt.ArrayLike,
+        camera: PinholeCamera,
+        camera_pose: Pose,
+        depth_scale: float | None,
+        stride: int,
+        counts: npt.NDArray[np.int64],
+    ) -> int:
+        """Bin one image into the frame buffers; returns how many cells it touched."""
+        d = camera.depth_in_metres(depth, depth_scale)
+        if stride < 1:
+            raise ConfigError(f"stride must be >= 1, got {stride}")
+        return int(
+            kernels.bin_depth(
+                d,
+                camera.scale_for(d, depth_scale),
+                camera.units_per_metre_for(d, depth_scale),
+                stride,
+                camera.fx,
+                camera.fy,
+                camera.cx,
+                camera.cy,
+                camera.min_range,
+                camera.max_range,
+                camera_pose.rotation.as_matrix(),
+                camera_pose.position,
+                self._inv_res,
+                self._origin_code(),
+                self._frame_h,
+                self._frame_lo,
+                self._frame_r2,
+                self._frame_sum,
+                self._frame_n,
+                not camera.noise.is_ideal,
+                self._stamp,
+                self._next_frame(),
+                self._touched,
+                counts,
+            )
+        )
+
+    def _frame_cells(self, n_touched: int, ideal: bool) -> tuple[npt.NDArray[np.int64], ...]:
+        """Buffer rows and columns of the binned frame's cells, and their heights [m]."""
         n = self.config.size
         idx = self._touched[:n_touched]
         i, j = idx // n, idx % n
         z = self._frame_h[i, j] if ideal else self._frame_sum[i, j] / self._frame_n[i, j]
+        return i, j, z
+
+    def misfit(
+        self,
+        depth: npt.ArrayLike,
+        camera: PinholeCamera,
+        camera_pose: Pose,
+        depth_scale: float | None = None,
+        stride: int = 1,
+    ) -> float:
+        """How far an image taken from ``camera_pose`` lies from the map, without fusing it.
+
+        The mean over the cells both know, and both see flat (as drift compensation
+        counts them: a cell across an edge differs with the viewpoint), of the height
+        difference less the drift offset taken last, each truncated at ``MISFIT_CAP_M`` (a
+        cell the map has not seen since something moved counts no more than that) [m]. A
+        frame placed at the wrong pose puts the tops of things where the map has ground,
+        and its misfit grows.
+
+        Returns:
+            The misfit; NaN when fewer than ``drift.min_cells`` cells overlap.
+
+        Raises:
+            DepthImageError: On a malformed image.
+        """
+        counts = np.zeros(kernels.N_COUNTS, dtype=np.int64)
+        n_touched = self._bin(depth, camera, camera_pose, depth_scale, stride, counts)
+        ideal = camera.noise.is_ideal
+        i, j, z = self._frame_cells(n_touched, ideal)
+        frame_range = (self._frame_h[i, j] - self._frame_lo[i, j]) if ideal else np.zeros(len(z))
+        flat = self.config.drift.flat_m
+        seen = self.known[i, j] & (frame_range < flat) & (self.spread[i, j] < flat)
+        if int(seen.sum()) < self.config.drift.min_cells:
+            return math.nan
+        difference = z[seen] - self.heights[i[seen], j[seen]] - self.drift.offset_m
+        return float(np.mean(np.minimum(np.abs(difference), MISFIT_CAP_M)))
+
+    def _register(self, n_touched: int, ideal: bool) -> Registration:
+        """Measure the frame's vertical offset against the map and take it out of the frame."""
+        i, j, z = self._frame_cells(n_touched, ideal)
         seen = self.known[i, j]
         frame_range = (self._frame_h[i, j] - self._frame_lo[i, j]) if ideal else np.zeros(len(z))
         measured = frame_offset(

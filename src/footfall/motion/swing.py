@@ -44,6 +44,34 @@ def minimum_jerk(tau: float) -> float:
     return t * t * t * (10.0 + t * (-15.0 + 6.0 * t))
 
 
+# A swing re-targeted in its last RETARGET_MIN_S gets that long, plus its remaining way
+# at RETARGET_SPEED_MPS, before it lands, when the way is longer than RETARGET_WAIT_M: the
+# step waits for it rather than dragging a foot over the ground to a target it could not
+# reach in the air; a shorter way is carried in the time left [s], [m/s], [m].
+RETARGET_MIN_S = 0.15
+RETARGET_SPEED_MPS = 0.6
+RETARGET_WAIT_M = 0.03
+
+
+def time_to_land(ways_m: list[float], time_left_s: float) -> float | None:
+    """How long a step must still last for late re-targeted feet to land [s].
+
+    Args:
+        ways_m: How far each re-targeted foot is from its new target [m].
+        time_left_s: The time the step has left [s].
+
+    Returns:
+        The time from now, or None when the time left will do.
+    """
+    if time_left_s >= RETARGET_MIN_S:
+        return None
+    wait = max(
+        (RETARGET_MIN_S + d / RETARGET_SPEED_MPS for d in ways_m if d > RETARGET_WAIT_M),
+        default=0.0,
+    )
+    return wait if wait > time_left_s else None
+
+
 class SwingTrajectory(Protocol):
     """A swing path in the world frame, re-targetable at any time."""
 
@@ -58,8 +86,12 @@ class SwingTrajectory(Protocol):
         """Foot position at ``t`` seconds after lift-off, shape (3,) [m]."""
         ...
 
-    def retarget(self, target: npt.ArrayLike, t: float) -> None:
-        """Move the touchdown target at time ``t`` [s]; the path stays continuous."""
+    def retarget(self, target: npt.ArrayLike, t: float, duration: float | None = None) -> None:
+        """Move the touchdown target at time ``t`` [s]; the path stays continuous.
+
+        With ``duration`` the swing also ends at that time after lift-off [s] (a late
+        re-target that needs longer than the swing has left).
+        """
         ...
 
     @property
@@ -354,9 +386,12 @@ class FlowSwing(_PolylineSwing):
                 path = cap_height(path, top)
         return path
 
-    def retarget(self, target: npt.ArrayLike, t: float) -> None:
+    def retarget(self, target: npt.ArrayLike, t: float, duration: float | None = None) -> None:
         """Follow the field from the foot's position at ``t`` to a new target."""
-        self._set_path(self._plan(self.position(t), target), t)
+        here = self.position(t)
+        if duration is not None:
+            self.duration = duration
+        self._set_path(self._plan(here, target), t)
 
 
 def polynomial_arc_coefficients(
@@ -448,11 +483,14 @@ class PolynomialArcSwing:
         powers = tau ** np.arange(7)
         return powers @ self._coefficients
 
-    def retarget(self, target: npt.ArrayLike, t: float) -> None:
+    def retarget(self, target: npt.ArrayLike, t: float, duration: float | None = None) -> None:
         """Refit the arc from the position at ``t`` to the new target."""
+        here = self.position(t)
+        if duration is not None:
+            self.duration = duration
         if t >= self.duration:
             self._fit(
                 np.asarray(target, dtype=np.float64), np.asarray(target, dtype=np.float64), 0.0
             )
             return
-        self._fit(self.position(t), np.asarray(target, dtype=np.float64), t)
+        self._fit(here, np.asarray(target, dtype=np.float64), t)

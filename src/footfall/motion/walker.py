@@ -11,7 +11,10 @@ The controller is a thin composition of its parts, each in its own module of
 policy (blind or mapped), body feedback, the leg solver and the safety monitor. Its state
 machine is the thesis' (Table 5.1): ``REST`` holds every foot down, ``STEPPING`` walks,
 back to ``REST`` once every foot is home; ``FROZEN`` (a target out of reach, no acceptable
-foothold) holds the last targets, all feet down, and says why.
+foothold) holds the last targets, all feet down, and says why. It is one module: every tick
+reads and writes the step under way, the body's reference pose and the state machine
+together (a step that waits for a foot re-targeted as it lands holds the body); the
+policies themselves live in the parts.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ from footfall.motion.gait_scheduler import GaitScheduler
 from footfall.motion.leg_solver import FootTargets, LegSolver
 from footfall.motion.safety import SafetyMonitor
 from footfall.motion.stroke_governor import StrokeGovernor
-from footfall.motion.swing import FlowSwing, PolynomialArcSwing, SwingTrajectory
+from footfall.motion.swing import FlowSwing, PolynomialArcSwing, SwingTrajectory, time_to_land
 from footfall.planning.terrain_planner import NoFoothold, TerrainPlanner
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
@@ -99,6 +102,7 @@ class WalkController:
         self.footholds_adjusted = 0
         self.touchdowns: deque[Touchdown] = deque()  # a long run bounds it (maxlen)
         self.touchdown_count = 0
+        self._planned_step_end = math.inf  # when the step under way was planned to end [s]
         self.holding = False  # hold still: finish the step under way, take no new one
         self._time: float | None = None
         self._velocity_scale = 1.0
@@ -252,9 +256,15 @@ class WalkController:
 
     def _govern(self, t: float) -> float:
         """The stroke governor's fraction of the twist; 0 unless the legs are stepping."""
-        if self.state is not GaitState.STEPPING or self.footholds.plan.pending_freeze:
+        if (
+            self.state is not GaitState.STEPPING
+            or self.footholds.plan.pending_freeze
+            or t >= self._planned_step_end
+        ):
             # The body only travels while the legs step, and stops at once when a swinging
-            # foot has to go back to where it lifted off.
+            # foot has to go back to where it lifted off. A step that waits for a foot
+            # re-targeted late holds the body where the step was planned to leave it (the
+            # strokes and the footholds were planned for that).
             return 0.0
         scale = self.governor.scale(
             self.feet_in_body(),
@@ -269,6 +279,8 @@ class WalkController:
         k = self._velocity_scale
         v = self.shaper.velocity
         self.pose = self.pose.moved((v[0] * k, v[1] * k), self.shaper.yaw_rate * k, dt)
+        if self.state is GaitState.STEPPING and (self._time or 0.0) >= self._planned_step_end:
+            return  # waiting for a late re-targeted foot: the stance legs keep their reach
         dh = self.floor + command.body_height - self.height
         limit = self.config.height_rate_limit * dt
         self.height += float(np.clip(dh, -limit, limit))
@@ -343,6 +355,7 @@ class WalkController:
             return
         self.swinging = swing
         self.state = GaitState.STEPPING
+        self._planned_step_end = s.step_start + s.step_duration
         self.swings = {}
         terrain = self.footholds.terrain_under if self.planner is not None else None
         clearance = self.footholds.swing_clearance
@@ -384,9 +397,23 @@ class WalkController:
         if replanned:
             self._update_floor(targets)
         local_t = t - self.scheduler.step_start
+        moved = {
+            leg: targets[leg]
+            for leg, swing in self.swings.items()
+            if np.linalg.norm(targets[leg] - swing.target) > self.config.retarget_tolerance
+        }
+        ways = [
+            float(np.linalg.norm(goal - self.swings[leg].position(local_t)))
+            for leg, goal in moved.items()
+        ]
+        wait = time_to_land(ways, self.scheduler.remaining(t))
+        if wait is not None:  # the group lands together, when the farthest foot can
+            self.scheduler.step_duration = local_t + wait
         for leg, swing in self.swings.items():
-            if np.linalg.norm(targets[leg] - swing.target) > self.config.retarget_tolerance:
-                swing.retarget(targets[leg], local_t)
+            if leg in moved or wait is not None:
+                duration = None if wait is None else self.scheduler.step_duration
+                swing.retarget(moved.get(leg, swing.target), local_t, duration)
+        for leg, swing in self.swings.items():
             self.feet_in_world[leg] = swing.position(local_t)
             ahead = swing.position(local_t + _VELOCITY_PROBE_DT)
             velocity[leg] = (ahead - self.feet_in_world[leg]) / _VELOCITY_PROBE_DT

@@ -3,7 +3,11 @@
 For each depth frame it takes the pose estimate of the same time (within a tolerance;
 without one the frame is skipped and counted), moves the rolling map to stay centred on
 the body, integrates the frame from the estimated camera pose and, each frame or on
-request, scores the map and publishes one :class:`~footfall.messages.MapUpdate`. The
+request, scores the map and publishes one :class:`~footfall.messages.MapUpdate`. When the
+pose guard has re-registered the estimate and offers the pose without that as an
+alternative, the frame is placed both ways and fused where it fits the map better (by a
+clear margin; the re-registered pose otherwise), and the pose taken goes back to the guard
+(:mod:`footfall.nodes.pose_guard`). The
 simulated walk and the replay of a recorded sequence build their maps here.
 """
 
@@ -18,6 +22,7 @@ import numpy as np
 
 from footfall.mapping.height_map import HeightMap, HeightMapConfig, MapSnapshot
 from footfall.messages import DepthFrame, GroundPrior, LogLine, MapUpdate, PoseEstimate
+from footfall.nodes.pose_guard import ALTERNATIVE_POSE_TOPIC, REGISTERED_POSE_TOPIC
 from footfall.runtime.bus import Bus
 from footfall.scoring.walkability import ScoreConfig, ScoreMap, score_map
 
@@ -33,6 +38,23 @@ PATH_HISTORY = 20_000
 # A camera that moved this much and sends the very same image is frozen [m], [rad].
 REPEAT_MOTION_M = 0.002
 REPEAT_TURN_RAD = 0.002
+# The alternative pose is taken when its frame's misfit is below this share of the
+# re-registered pose's, and lower by at least ALTERNATIVE_GAIN_M [m].
+ALTERNATIVE_SHARE = 0.7
+ALTERNATIVE_GAIN_M = 0.001
+
+
+def pose_near(poses: deque[PoseEstimate], stamp: float) -> PoseEstimate | None:
+    """The held pose estimate nearest time ``stamp``, if one is within the tolerance."""
+    best = None
+    for pose in reversed(poses):
+        if abs(pose.stamp - stamp) <= POSE_TOLERANCE_S and (
+            best is None or abs(pose.stamp - stamp) < abs(best.stamp - stamp)
+        ):
+            best = pose
+        if pose.stamp < stamp - POSE_TOLERANCE_S:
+            break
+    return best
 
 
 def map_update(stamp: float, sequence: int, snapshot: MapSnapshot, scores: ScoreMap) -> MapUpdate:
@@ -119,27 +141,22 @@ class MappingNode:
         self.pixels_dropped = 0
         self.points_outside = 0
         self.largest_offset_m = 0.0
+        self.alternatives_taken = 0
         self.update_ms: deque[float] = deque(maxlen=TIMING_HISTORY)
         self.update_cpu_ms: deque[float] = deque(maxlen=TIMING_HISTORY)
         self.camera_path_xy: deque[tuple[float, float]] = deque(maxlen=PATH_HISTORY)
         self._poses: deque[PoseEstimate] = deque(maxlen=POSE_HISTORY)
+        self._alternatives: deque[PoseEstimate] = deque(maxlen=POSE_HISTORY)
         self._pending: deque[DepthFrame] = deque()
         self._previous: tuple[DepthFrame, PoseEstimate] | None = None
         bus.subscribe(PoseEstimate.TOPIC, self._on_pose)
         bus.subscribe(DepthFrame.TOPIC, self._on_depth)
         bus.subscribe(GroundPrior.TOPIC, self._on_ground_prior)
+        bus.subscribe(ALTERNATIVE_POSE_TOPIC, self._alternatives.append)
 
     def _pose_at(self, stamp: float) -> PoseEstimate | None:
         """The held pose estimate of time ``stamp``, if one is within the tolerance."""
-        best = None
-        for pose in reversed(self._poses):
-            if abs(pose.stamp - stamp) <= POSE_TOLERANCE_S and (
-                best is None or abs(pose.stamp - stamp) < abs(best.stamp - stamp)
-            ):
-                best = pose
-            if pose.stamp < stamp - POSE_TOLERANCE_S:
-                break
-        return best
+        return pose_near(self._poses, stamp)
 
     def _on_pose(self, message: PoseEstimate) -> None:
         if self._poses and message.stamp < self._poses[-1].stamp:
@@ -218,6 +235,9 @@ class MappingNode:
             return
         self._previous = (frame, pose)
         t0, cpu0 = time.perf_counter(), time.thread_time()
+        alternative = pose_near(self._alternatives, frame.stamp) if self._alternatives else None
+        if alternative is not None:
+            pose = self._registered(frame, pose, alternative)
         body = pose.body_in_world.position
         self.height_map.recentre((float(body[0]), float(body[1])))
         stats = self.height_map.integrate_depth(
@@ -253,6 +273,48 @@ class MappingNode:
         if update is not None:
             self.bus.publish(MapUpdate.TOPIC, update)
 
+    def _registered(
+        self, frame: DepthFrame, pose: PoseEstimate, alternative: PoseEstimate
+    ) -> PoseEstimate:
+        """The one of two poses where ``frame`` fits the map, said to the pose guard.
+
+        Without enough overlap to tell, the pose stays and the verdict waits for a frame
+        that can tell.
+        """
+        body = pose.body_in_world.position
+        self.height_map.recentre((float(body[0]), float(body[1])))
+        misfits = [
+            self.height_map.misfit(
+                frame.depth,
+                frame.intrinsics,
+                p.camera_in_world,
+                depth_scale=frame.depth_scale,
+                stride=self.stride,
+            )
+            for p in (pose, alternative)
+        ]
+        if not all(math.isfinite(m) for m in misfits):
+            return pose
+        ours, theirs = misfits
+        chosen = pose
+        if theirs < ALTERNATIVE_SHARE * ours and ours - theirs >= ALTERNATIVE_GAIN_M:
+            chosen = alternative
+            self.alternatives_taken += 1
+        self.bus.publish(
+            LogLine.TOPIC,
+            LogLine(
+                frame.stamp,
+                self.name,
+                "info",
+                f"depth frame {frame.sequence} fits the map {1e3 * ours:.1f} mm off at the "
+                f"re-registered pose, {1e3 * theirs:.1f} mm at the estimate's own: took the "
+                + ("estimate's own" if chosen is alternative else "re-registered"),
+            ),
+        )
+        self._alternatives.clear()
+        self.bus.publish(REGISTERED_POSE_TOPIC, chosen)
+        return chosen
+
     def _score(self, stamp: float) -> MapUpdate:
         snapshot = self.height_map.snapshot()
         self.scores = score_map(snapshot, self.score_config)
@@ -272,6 +334,7 @@ class MappingNode:
             "frames_repeated": self.frames_repeated,
             "frames_inconsistent": self.frames_inconsistent,
             "map_offset_max_m": self.largest_offset_m,
+            "frames_at_alternative_pose": self.alternatives_taken,
         }
 
     def timing(self) -> dict[str, float]:

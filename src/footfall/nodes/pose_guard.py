@@ -13,6 +13,17 @@ world does not lurch. Corrections compose over several jumps. Comparing motions,
 a slow disagreement between the estimate and odometry (a foot slipping, SLAM drifting) is
 never taken for a jump.
 
+The robot's own motion can also outrun odometry: a foot that slips off a stone lets the
+body lurch by centimetres while the commanded motion says it stood. An estimate that
+followed such a lurch is right, and re-registering it would put the map out of register.
+So a re-registration is a hypothesis the map tests: until the map's verdict comes, the
+guard publishes beside each corrected estimate the one it would have published without
+the re-registration (``pose/alternative``, before the corrected one); the mapping node
+places its next frame both ways, fuses it where it fits the map and says which it took
+(``pose/registered``). When that was the alternative, the guard undoes the re-registration.
+A verdict that does not come within ``VERDICT_WAIT_S`` (no frame, or a map that cannot tell
+the two apart: flat ground) lets the re-registration stand.
+
 A jump smaller than the allowance passes (a few centimetres, two degrees): the height map's
 drift compensation takes its vertical part.
 
@@ -43,6 +54,15 @@ from footfall.robot.planar import PlanarPose
 from footfall.runtime.bus import Bus
 from footfall.runtime.faults import RAW_POSE_TOPIC
 from footfall.sensing.pose import Pose
+
+# Where the guard publishes the estimate without its latest re-registration, and where
+# the map says which of the two its frame fitted.
+ALTERNATIVE_POSE_TOPIC = "pose/alternative"
+REGISTERED_POSE_TOPIC = "pose/registered"
+# A re-registration the map has not judged within this time stands [s].
+VERDICT_WAIT_S = 1.0
+# A registered pose is the alternative when they lie this close [m].
+SAME_POSE_M = 1e-6
 
 
 @dataclass(frozen=True)
@@ -131,7 +151,15 @@ class PoseGuardNode:
         self._attitude: Rotation | None = None
         self._scatter = 0.0  # mean square of the estimates' motion about odometry's [m^2]
         self.gain = 1.0
+        self.refuted = 0  # re-registrations the map undid
+        self._latest_raw: PoseEstimate | None = None
+        # While a re-registration awaits the map's verdict: the correction before it, when
+        # it was made, and the alternatives published since.
+        self._undo: Pose | None = None
+        self._undo_since = 0.0
+        self._alternatives: dict[float, PoseEstimate] = {}
         bus.subscribe(raw_topic, self._on_raw)
+        bus.subscribe(REGISTERED_POSE_TOPIC, self._on_registered)
         bus.subscribe(GaitStatus.TOPIC, self._on_status, last=True)
         bus.subscribe(RobotState.TOPIC, self._on_state, last=True)
 
@@ -141,14 +169,17 @@ class PoseGuardNode:
     def _on_state(self, state: RobotState) -> None:
         self._attitude = state.orientation_body_in_world
 
-    def _corrected(self, raw: PoseEstimate) -> PoseEstimate:
-        c = self.correction
+    def _corrected(self, raw: PoseEstimate, correction: Pose | None = None) -> PoseEstimate:
+        c = self.correction if correction is None else correction
         return PoseEstimate(raw.stamp, c.compose(raw.camera_in_world), c.compose(raw.body_in_world))
 
     def _on_raw(self, raw: PoseEstimate) -> None:
+        self._latest_raw = raw
         estimate = self._corrected(raw)
         last, odometry, then = self._last, self._odometry, self._odometry_then
         published = estimate
+        if self._undo is not None and raw.stamp - self._undo_since > VERDICT_WAIT_S:
+            self._undo, self._alternatives = None, {}  # no verdict: the correction stands
         if last is not None and odometry is not None and then is not None:
             if raw.stamp > last.stamp:
                 predicted = self._predicted(last, then, odometry)
@@ -159,9 +190,47 @@ class PoseGuardNode:
                 else:
                     self._measure(estimate, predicted)
             published = self._fused(estimate, odometry)
+            if self._undo is not None:
+                # Before the corrected estimate: a frame waiting for its pose finds both.
+                alternative = self._fused(self._corrected(raw, self._undo), odometry, gain=1.0)
+                self._alternatives[raw.stamp] = alternative
+                self.bus.publish(ALTERNATIVE_POSE_TOPIC, alternative)
         self._last = estimate
         self.bus.publish(PoseEstimate.TOPIC, published)
         self._odometry_then = self._odometry  # the controller has taken it by now
+
+    def _on_registered(self, registered: PoseEstimate) -> None:
+        """The map's verdict: undo the re-registration when it took the alternative."""
+        if self._undo is None:
+            return
+        alternative = self._alternatives.get(registered.stamp)
+        if alternative is None:
+            return  # a verdict on a pose from before this re-registration
+        took_alternative = (
+            float(
+                np.linalg.norm(
+                    registered.body_in_world.position - alternative.body_in_world.position
+                )
+            )
+            <= SAME_POSE_M
+        )
+        if took_alternative:
+            self.correction = self._undo
+            self.jumps -= 1
+            self.refuted += 1
+            if self._latest_raw is not None:
+                self._last = self._corrected(self._latest_raw)
+            self.bus.publish(
+                LogLine.TOPIC,
+                LogLine(
+                    registered.stamp,
+                    self.name,
+                    "warning",
+                    "the map placed the frame where the estimate said: the robot itself moved "
+                    "beyond odometry (a slip), re-registration undone",
+                ),
+            )
+        self._undo, self._alternatives = None, {}
 
     @staticmethod
     def _predicted(last: PoseEstimate, then: PlanarPose, now: PlanarPose) -> PlanarPose:
@@ -190,12 +259,14 @@ class PoseGuardNode:
         gain = 1.0 if r <= 1e-3 * q else (-q + math.sqrt(q * q + 4.0 * q * r)) / (2.0 * r)
         self.gain = min(max(gain, c.min_gain), 1.0)
 
-    def _fused(self, estimate: PoseEstimate, odometry: PlanarPose) -> PoseEstimate:
+    def _fused(
+        self, estimate: PoseEstimate, odometry: PlanarPose, gain: float | None = None
+    ) -> PoseEstimate:
         """The estimate blended with odometry in the plane, tilted as the IMU says."""
         c = self.config
         body = estimate.body_in_world
         camera_in_body = body.inverse().compose(estimate.camera_in_world)
-        k = self.gain
+        k = self.gain if gain is None else gain
         x = odometry.x + k * (float(body.position[0]) - odometry.x)
         y = odometry.y + k * (float(body.position[1]) - odometry.y)
         yaw = odometry.yaw + k * wrap(heading(body.rotation) - odometry.yaw)
@@ -240,6 +311,8 @@ class PoseGuardNode:
         target = Pose(
             np.array([predicted.x, predicted.y, float(last.body_in_world.position[2])]), rotation
         )
+        if self._undo is None:  # a second jump before the verdict: the map judges both
+            self._undo, self._undo_since = self.correction, raw.stamp
         self.correction = target.compose(raw.body_in_world.inverse())
         self.jumps += 1
         self.bus.publish(

@@ -1,8 +1,13 @@
 """``footfall bench soak``: walk laps for a long time and watch memory and per-frame time.
 
-The planned robot (camera, map, footholds) walks from a terrain's start to its goal, turns
-on the spot, walks back, and so on, for a given wall-clock time (a robot that freezes for
-want of a foothold is turned on the spot to free it, as an operator would). The run keeps
+The planned robot (camera, map, footholds) walks from a terrain's start towards its goal
+and walks back to the start backwards, and so on, for a given wall-clock time: backwards,
+its feet land where it walked before, on cells its camera has seen (turning on the spot at
+an end puts feet beside the robot, where the camera never looked). So that those cells are
+still in the rolling map on the way back, a lap stops short of the goal where the map
+window would have scrolled the start out (``LAP_SHARE`` of its half-width). A robot that freezes for
+want of a foothold backs off the way it came for a moment and tries again, as an operator
+would. The run keeps
 bounded logs (the per-tick record and the touchdowns as ring buffers). Every ``sample_seconds`` it
 samples the resident memory, the mean per-frame mapping time and per-tick control time
 since the last sample (wall and CPU time: the CPU time does not change when other
@@ -32,14 +37,16 @@ from footfall.sim.walk import SimRobot, WalkSettings
 
 # Rows of the per-tick record and touchdowns kept during a soak.
 LOG_TICKS = 2_000
-# Turn on the spot while the heading is this far off the way to the next end [rad].
-TURN_ON_SPOT = 0.35
+# Heading correction: yaw rate per radian of heading error, and its limit [1/s], [rad/s].
+YAW_GAIN = 1.0
 YAW_RATE = 0.3
+# A lap reaches at most this share of the map's half-width from its start.
+LAP_SHARE = 0.8
 # An end of the lap counts as reached this close to it [m].
 END_TOLERANCE = 0.15
-# A frozen robot is turned on the spot this long to free it, as an operator would [s].
-UNFREEZE_TURN_S = 2.0
-# A soak that stays frozen this long, turning or not, has failed [s of walk time].
+# A frozen robot backs off the way it came this long before it tries again [s].
+BACK_OFF_S = 3.0
+# A soak that stays frozen this long, backing off or not, has failed [s of walk time].
 FROZEN_LIMIT_S = 30.0
 QUANTITIES = ("rss_mb", "map_ms", "map_cpu_ms", "control_ms", "control_cpu_ms", "objects")
 
@@ -60,47 +67,62 @@ def resident_mb() -> float:
 
 @dataclass
 class LapTask:
-    """Walk from end to end of a terrain and back, turning on the spot at each end.
+    """Walk forwards from the first end of a terrain to the second, and backwards to the first.
 
     Args:
-        ends: The two ends, world ``(x, y)`` [m].
+        ends: The two ends, world ``(x, y)`` [m]; the body faces from the first to the second.
         command: Speed and body height.
     """
 
     ends: tuple[np.ndarray, np.ndarray]
     command: WalkCommand
     laps: int = 0
-    unfreezes: int = 0
+    back_offs: int = 0
     _target: int = 1
-    _turn_until: float = -math.inf
+    _back_off_until: float = -math.inf
+    _back_off_kind: int = -1  # 0: walk the other way, 1, 2: turn left, right
 
     def next_command(
         self, x: float, y: float, yaw: float, t: float, frozen: bool = False
     ) -> WalkCommand:
         """The command for a body at ``(x, y, yaw)`` at time ``t``.
 
-        A frozen robot (no foothold ahead) gets a turn on the spot for ``UNFREEZE_TURN_S``:
-        a new command it resumes on; it then heads for its end again.
+        A frozen robot gets a new command for ``BACK_OFF_S``, as an operator would give:
+        first walk the other way, over ground it has just crossed; when it froze again, turn
+        on the spot one way, then the other (a foot at the end of its reach gets back into
+        it), and so on; it then heads for its end again.
         """
-        height = self.command.body_height
-        if frozen and t >= self._turn_until:
-            self.unfreezes += 1
-            self._turn_until = t + UNFREEZE_TURN_S
-        if t < self._turn_until:
-            return WalkCommand(speed=0.0, body_height=height, yaw_rate=YAW_RATE, stamp=t)
+        if frozen and t >= self._back_off_until:
+            self.back_offs += 1
+            self._back_off_until = t + BACK_OFF_S
+            self._back_off_kind = (self._back_off_kind + 1) % 3
+        elif not frozen and t >= self._back_off_until + BACK_OFF_S:
+            self._back_off_kind = -1  # walking again: the next freeze starts with backing off
         target = self.ends[self._target]
         if math.hypot(target[0] - x, target[1] - y) < END_TOLERANCE:
             self._target = 1 - self._target
             self.laps += self._target == 1  # back at the start: one lap done
             target = self.ends[self._target]
-        heading = math.atan2(target[1] - y, target[0] - x)
+        forwards = self._target == 1
+        if t < self._back_off_until:
+            if self._back_off_kind > 0:
+                return WalkCommand(
+                    speed=0.0,
+                    body_height=self.command.body_height,
+                    yaw_rate=YAW_RATE if self._back_off_kind == 1 else -YAW_RATE,
+                    stamp=t,
+                )
+            forwards = not forwards
+        # Backwards, the body keeps facing the second end: the way to go is behind it.
+        heading = math.atan2(target[1] - y, target[0] - x) + (0.0 if self._target else math.pi)
         error = math.atan2(math.sin(heading - yaw), math.cos(heading - yaw))
-        if abs(error) > TURN_ON_SPOT:
-            return WalkCommand(
-                speed=0.0, body_height=height, yaw_rate=math.copysign(YAW_RATE, error), stamp=t
-            )
-        yaw_rate = float(np.clip(error, -YAW_RATE, YAW_RATE))
-        return WalkCommand(speed=self.command.speed, body_height=height, yaw_rate=yaw_rate, stamp=t)
+        return WalkCommand(
+            direction=(1.0, 0.0) if forwards else (-1.0, 0.0),
+            speed=self.command.speed,
+            body_height=self.command.body_height,
+            yaw_rate=float(np.clip(YAW_GAIN * error, -YAW_RATE, YAW_RATE)),
+            stamp=t,
+        )
 
 
 def trends(samples: list[dict[str, float]], window_minutes: float) -> dict[str, object]:
@@ -156,10 +178,10 @@ def run_soak(
     assert mapping is not None
     # The terrain task only judges (a fall, a robot frozen too long); the laps steer.
     judge = TerrainTask(bus, ground, settings.command, frozen_timeout=FROZEN_LIMIT_S)
-    laps = LapTask(
-        (np.array(ground.start, dtype=float), np.array(ground.goal, dtype=float)),
-        settings.command,
-    )
+    start, goal = np.array(ground.start, dtype=float), np.array(ground.goal, dtype=float)
+    way = goal - start
+    reach = min(float(np.hypot(*way)), LAP_SHARE * 0.5 * settings.map.extent)
+    laps = LapTask((start, start + reach * way / np.hypot(*way)), settings.command)
     judge.begin()
     scheduler = SimulatedScheduler(settings.control_rate_hz)
     dt = scheduler.period
@@ -225,7 +247,7 @@ def run_soak(
         "sample_seconds": sample_seconds,
         "window_minutes": window,
         "laps": laps.laps,
-        "unfreezes": laps.unfreezes,
+        "back_offs": laps.back_offs,
         "sim_seconds": sim_seconds,
         "fell": end_reason == "the robot fell",
         "ended_early": end_reason,

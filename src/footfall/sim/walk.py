@@ -313,6 +313,7 @@ class SimRobot:
         metrics["stale_stops"] = self.graph.movement.stops
         if self.guard is not None:
             metrics["pose_jumps_detected"] = self.guard.jumps
+            metrics["pose_jumps_refuted"] = self.guard.refuted
         if self.link is not None:
             metrics["faults"] = dataclasses.asdict(self.link.counts)
         if isinstance(scheduler, WallClockScheduler):
