@@ -259,7 +259,6 @@ class WalkController:
         if (
             self.state is not GaitState.STEPPING
             or self.footholds.plan.pending_freeze
-            or t >= self._planned_step_end
         ):
             # The body only travels while the legs step, and stops at once when a swinging
             # foot has to go back to where it lifted off. A step that waits for a foot
@@ -279,8 +278,6 @@ class WalkController:
         k = self._velocity_scale
         v = self.shaper.velocity
         self.pose = self.pose.moved((v[0] * k, v[1] * k), self.shaper.yaw_rate * k, dt)
-        if self.state is GaitState.STEPPING and (self._time or 0.0) >= self._planned_step_end:
-            return  # waiting for a late re-targeted foot: the stance legs keep their reach
         dh = self.floor + command.body_height - self.height
         limit = self.config.height_rate_limit * dt
         self.height += float(np.clip(dh, -limit, limit))

@@ -40,8 +40,8 @@ REPEAT_MOTION_M = 0.002
 REPEAT_TURN_RAD = 0.002
 # The alternative pose is taken when its frame's misfit is below this share of the
 # re-registered pose's, and lower by at least ALTERNATIVE_GAIN_M [m].
-ALTERNATIVE_SHARE = 0.7
-ALTERNATIVE_GAIN_M = 0.001
+ALTERNATIVE_SHARE = 0.4
+ALTERNATIVE_GAIN_M = 0.002
 
 
 def pose_near(poses: deque[PoseEstimate], stamp: float) -> PoseEstimate | None:
