@@ -13,8 +13,8 @@ machine is the thesis' (Table 5.1): ``REST`` holds every foot down, ``STEPPING``
 back to ``REST`` once every foot is home; ``FROZEN`` (a target out of reach, no acceptable
 foothold) holds the last targets, all feet down, and says why. It is one module: every tick
 reads and writes the step under way, the body's reference pose and the state machine
-together (a step that waits for a foot re-targeted as it lands holds the body); the
-policies themselves live in the parts.
+together (a step lengthened for a foot re-targeted as it lands); the policies themselves
+live in the parts.
 """
 
 from __future__ import annotations
@@ -102,7 +102,6 @@ class WalkController:
         self.footholds_adjusted = 0
         self.touchdowns: deque[Touchdown] = deque()  # a long run bounds it (maxlen)
         self.touchdown_count = 0
-        self._planned_step_end = math.inf  # when the step under way was planned to end [s]
         self.holding = False  # hold still: finish the step under way, take no new one
         self._time: float | None = None
         self._velocity_scale = 1.0
@@ -256,14 +255,9 @@ class WalkController:
 
     def _govern(self, t: float) -> float:
         """The stroke governor's fraction of the twist; 0 unless the legs are stepping."""
-        if (
-            self.state is not GaitState.STEPPING
-            or self.footholds.plan.pending_freeze
-        ):
+        if self.state is not GaitState.STEPPING or self.footholds.plan.pending_freeze:
             # The body only travels while the legs step, and stops at once when a swinging
-            # foot has to go back to where it lifted off. A step that waits for a foot
-            # re-targeted late holds the body where the step was planned to leave it (the
-            # strokes and the footholds were planned for that).
+            # foot has to go back to where it lifted off.
             return 0.0
         scale = self.governor.scale(
             self.feet_in_body(),
@@ -352,7 +346,6 @@ class WalkController:
             return
         self.swinging = swing
         self.state = GaitState.STEPPING
-        self._planned_step_end = s.step_start + s.step_duration
         self.swings = {}
         terrain = self.footholds.terrain_under if self.planner is not None else None
         clearance = self.footholds.swing_clearance
