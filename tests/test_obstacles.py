@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import shared_data
@@ -305,6 +305,7 @@ def test_plane_coefficients_and_angles_agree(height, pitch, roll):
     ),
     tolerance=st.floats(0.05, 1.0),
 )
+@settings(deadline=None)  # the first call compiles the kernels; speed is for benchmarks
 def test_grid_clusters_equal_the_neighbour_pair_graph(cloud, tolerance):
     """The grid union-find gives exactly the connected components of the kd-tree's pairs
     within the tolerance (the method it replaces), in linear memory."""
