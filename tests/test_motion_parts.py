@@ -4,6 +4,7 @@ feedback, leg solver, safety."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -194,10 +195,43 @@ def test_mapped_footholds_land_on_valid_cells_and_say_when_none_is_left(default_
     refused = pit.plan_step(_context(spec, swing), far, swing)
     assert isinstance(refused, NoFoothold) and refused.leg in spec.leg_names
     pit.plan.version = -1  # a new map arrived
-    starts = {int(leg): feet[leg] for leg in np.flatnonzero(swing)}
+    lifted_from = _context(spec, swing).feet_in_world
+    starts = {int(leg): lifted_from[leg] for leg in np.flatnonzero(swing)}
     out, replanned = pit.current_targets(_context(spec, swing), far, swing, starts)
     assert not replanned and pit.plan.pending_freeze is not None
-    np.testing.assert_array_equal(out[swing], feet[swing])
+    np.testing.assert_array_equal(out[swing], lifted_from[swing])
+
+
+def test_a_foot_sent_back_never_lands_out_of_reach(default_spec):
+    """A re-plan that finds no foothold stops the body; a foot whose lift-off point the
+    body has left out of its leg's reach keeps its planned target instead, and every
+    swinging foot lands where its leg reaches it."""
+    spec = default_spec
+    swing = np.array([True, False, True, False, True, False])
+    before = _context(spec, swing)
+    lifted_from = before.feet_in_world
+    policy = MappedFootholds(_flat_planner(spec), spec.foot_radius)
+    planned = policy.plan_step(before, lifted_from - [0.06, 0.0, 0.0], swing)  # backwards
+    assert not isinstance(planned, NoFoothold)
+    planned = planned.copy()
+    now = replace(before, pose=PlanarPose(-0.1, 0.0, 0.0))  # the body walked on 10 cm
+    kin = LegKinematics(spec)
+
+    def reaches(leg, foot_in_world):
+        foot_in_body = now.pose.points_to_body(foot_in_world)
+        return kin.reachable(leg, foot_in_body - [0.0, 0.0, now.body_z], policy.reach_margin)
+
+    left_behind = [leg for leg in np.flatnonzero(swing) if not reaches(leg, lifted_from[leg])]
+    assert left_behind  # the case under test: a lift-off point out of reach
+    policy.planner = _flat_planner(spec, hole_x=-0.5)  # a new map: a pit under every target
+    policy.plan.version = -1
+    starts = {int(leg): lifted_from[leg] for leg in np.flatnonzero(swing)}
+    out, _ = policy.current_targets(now, lifted_from - [0.06, 0.0, 0.0], swing, starts)
+    assert policy.plan.pending_freeze is not None
+    for leg in np.flatnonzero(swing):
+        assert reaches(leg, out[leg])
+        expected = planned[leg] if leg in left_behind else lifted_from[leg]
+        np.testing.assert_array_equal(out[leg], expected)
 
 
 # Feedback -------------------------------------------------------------------------------

@@ -263,9 +263,12 @@ class MappedFootholds:
         Late in a swing only a new map re-plans, and the search starts from the present
         target rather than the nominal one: a target still acceptable stays, one that is
         not moves to the nearest acceptable cell, so a foot about to land never lurches
-        across a step. When a re-plan finds no acceptable foothold, the foot goes back to
-        where it lifted off (a known, safe cell) and the robot freezes at the end of the
-        step.
+        across a step. When a re-plan finds no acceptable foothold, the body stops, each
+        swinging foot goes back to where it lifted off (a known, safe cell) and the robot
+        freezes at the end of the step. A lift-off point the stopped body has left behind
+        out of the leg's reach is no place to land: that foot keeps its planned target if
+        the leg reaches it (planned on the map before), so no supporting foot ends up out
+        of reach, which no new command could undo.
         """
         plan = self.plan
         moved = np.linalg.norm(nominal[swinging, :2] - plan.nominal[swinging, :2], axis=1)
@@ -279,9 +282,20 @@ class MappedFootholds:
         if isinstance(replanned, NoFoothold):
             plan.pending_freeze = replanned
             for leg, start in swing_starts.items():
-                plan.targets[leg] = start
+                if self._reaches(context, leg, start) or not self._reaches(
+                    context, leg, plan.targets[leg]
+                ):
+                    plan.targets[leg] = start
             return plan.targets, False
         return plan.targets, True
+
+    def _reaches(
+        self, context: StepContext, leg: int, foot_in_world: npt.NDArray[np.float64]
+    ) -> bool:
+        """Whether a leg of the body as it stands now reaches a foot position."""
+        foot_in_body = context.pose.points_to_body(foot_in_world)
+        foot_in_body[2] -= context.body_z + context.height_correction
+        return bool(self.planner.kinematics.reachable(leg, foot_in_body, self.reach_margin))
 
     def floor(
         self,

@@ -7,8 +7,8 @@ request, scores the map and publishes one :class:`~footfall.messages.MapUpdate`.
 pose guard has re-registered the estimate and offers the pose without that as an
 alternative, the frame is placed both ways and fused where it fits the map better (by a
 clear margin; the re-registered pose otherwise), and the pose taken goes back to the guard
-(:mod:`footfall.nodes.pose_guard`). The
-simulated walk and the replay of a recorded sequence build their maps here.
+(:mod:`footfall.nodes.pose_guard`). The simulated walk and the replay of a recorded
+sequence build their maps here.
 """
 
 from __future__ import annotations
