@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import signal
@@ -44,12 +43,11 @@ def test_the_station_page_shows_the_robot_and_drives_it(tmp_path):
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     port = free_port()
     robot = start_robot(endpoint, "flat", tmp_path / "robot", 90.0)
-    env = {**os.environ}
+    station_log = (tmp_path / "station.txt").open("w")  # a pipe nobody reads could fill up
     station = subprocess.Popen(
         [sys.executable, "-m", "footfall.cli", "station", "--connect", endpoint]
         + ["--port", str(port), "--seconds", "80"],
-        env=env,
-        stdout=subprocess.PIPE,
+        stdout=station_log,
         stderr=subprocess.STDOUT,
     )
     try:
@@ -80,8 +78,10 @@ def test_the_station_page_shows_the_robot_and_drives_it(tmp_path):
     finally:
         station.send_signal(signal.SIGINT)
         robot.send_signal(signal.SIGINT)
-        station.wait(timeout=30)
+        station.wait(timeout=30)  # Ctrl-C ends the station between two updates
         robot.wait(timeout=60)
+        station_log.close()
+    assert station.returncode == 0, (tmp_path / "station.txt").read_text()
 
 
 def test_the_station_walks_to_a_clicked_goal_and_beats_its_heart():

@@ -39,19 +39,20 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace, console: Console) -> int:
     """Serve the station until Ctrl-C (or --seconds)."""
+    from footfall.runtime.scheduler import stop_on_signals
     from footfall.runtime.zenoh_bus import ZenohBus
     from footfall.station import Station
 
-    with ZenohBus(network_config(args)) as bus:
+    # Ctrl-C or SIGTERM ends the run between two updates: an interrupt raised in the middle
+    # of one could leave the page server or the session half-way and the process hanging.
+    with stop_on_signals() as stopped, ZenohBus(network_config(args)) as bus:
         station = Station(bus, host=args.host, port=args.port, biped=args.biped)
         console.print(
             f"station for robot [bold]{args.name}[/] at http://{args.host}:{args.port}",
             highlight=False,
         )
         try:
-            station.run(args.seconds)
-        except KeyboardInterrupt:
-            pass
+            station.run(args.seconds, stop=stopped)
         finally:
             station.close()
     return 0

@@ -2,33 +2,17 @@
 
 from __future__ import annotations
 
-import signal
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from footfall.recording.session import Recorders
 from footfall.reports.walk import WalkReport, WalkRequest, prepare_walk
 from footfall.runtime.bus import InProcessBus
+from footfall.runtime.scheduler import stop_on_signals
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
 from footfall.sim.robot import OUTGOING, RobotSettings, run_robot
-
-
-@contextmanager
-def stop_on_signals() -> Iterator[Callable[[], bool]]:
-    """While inside, SIGINT and SIGTERM only ask to stop; yields whether one has."""
-    asked: list[int] = []
-    previous = {
-        s: signal.signal(s, lambda signum, frame: asked.append(signum))
-        for s in (signal.SIGINT, signal.SIGTERM)
-    }
-    try:
-        yield lambda: bool(asked)
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
 
 
 @dataclass(frozen=True)

@@ -6,17 +6,36 @@ to back (the backend's ``advance`` computes the time step). The wall-clock sched
 each tick on its deadline: it sleeps out the rest of the period, unless the backend's own
 ``advance`` is the real wait (hardware), and counts overruns, ticks that end after the next
 one was due; an overrun skips the ticks it ran over rather than bursting to catch up.
+A process that runs nodes until it is stopped (the robot, the station) catches SIGINT and
+SIGTERM with :func:`stop_on_signals` and ends between two ticks, never in the middle of one.
 """
 
 from __future__ import annotations
 
+import signal
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from footfall.errors import ConfigError
 
 Tick = Callable[[float], bool]
+
+
+@contextmanager
+def stop_on_signals() -> Iterator[Callable[[], bool]]:
+    """While inside, SIGINT and SIGTERM only ask to stop; yields whether one has."""
+    asked: list[int] = []
+    previous = {
+        s: signal.signal(s, lambda signum, frame: asked.append(signum))
+        for s in (signal.SIGINT, signal.SIGTERM)
+    }
+    try:
+        yield lambda: bool(asked)
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
 
 
 def _check_rate(rate_hz: float) -> float:

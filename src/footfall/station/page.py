@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
+from collections.abc import Callable
 
 import numpy as np
 
@@ -346,10 +347,21 @@ class Station:
             scene.add_line_segments("/biped/footsteps", feet, (20, 170, 40))
             scene.add_line_segments("/biped/com", polyline_segments(p.com, 0.02), (0, 0, 0))
 
-    def run(self, seconds: float | None = None, rate_hz: float = 50.0) -> None:
-        """Serve the page and keep the link until the time is up (forever by default)."""
+    def run(
+        self,
+        seconds: float | None = None,
+        rate_hz: float = 50.0,
+        stop: Callable[[], bool] | None = None,
+    ) -> None:
+        """Serve the page and keep the link until the time is up (forever by default).
+
+        Args:
+            seconds: Longest run [s].
+            rate_hz: Rate of the page's updates and the commands' heartbeat [Hz].
+            stop: Asked between two updates; True ends the run (a signal caught).
+        """
         end = math.inf if seconds is None else time.monotonic() + seconds
-        while time.monotonic() < end:
+        while time.monotonic() < end and not (stop is not None and stop()):
             self.step()
             self.bus.spin(1.0 / rate_hz)
 
