@@ -469,4 +469,9 @@ def test_bench_faults_and_soak_write_their_reports(tmp_path):
     figures = json.loads((soak / "soak.json").read_text())
     assert len(figures["samples"]) >= 3 and figures["log_ticks_kept"] <= 2000
     assert {"rss_mb", "map_cpu_ms", "control_cpu_ms", "objects"} <= set(figures["slope_per_minute"])
+    for sample in figures["samples"]:  # the machine's speed, measured beside the soak's times
+        assert sample["reference_cpu_ms"] > 0
+        assert sample["map_per_reference"] == pytest.approx(
+            sample["map_cpu_ms"] / sample["reference_cpu_ms"]
+        )
     assert (soak / "soak.png").stat().st_size

@@ -106,8 +106,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         description=(
             "Walk laps of a terrain (planned, with the camera) for --minutes of wall time, "
             "sampling resident memory, per-frame mapping time, per-tick control time and live "
-            "objects; writes soak.json (samples, slopes per minute, growth from the first to "
-            "the last ten minutes) and soak.png to --out."
+            "objects, and the time of a fixed reference workload (the machine's own speed "
+            "drifts; the CPU times are also given as ratios to it); writes soak.json "
+            "(samples, slopes per minute, growth from the first to the last ten minutes) and "
+            "soak.png to --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )

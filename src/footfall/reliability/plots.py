@@ -51,23 +51,33 @@ def plot_fault_benchmark(bench: dict, path: Path) -> Path:
 
 
 def plot_soak(soak: dict, path: Path) -> Path:
-    """Memory, per-frame mapping time, per-tick control time and live objects over a soak."""
+    """Memory, live objects, per-frame and per-tick times, and the reference ratios of a soak.
+
+    The reference is the fixed workload timed at each sample (the machine's own speed).
+    """
     samples = soak["samples"]
     minutes = [s["wall_minutes"] for s in samples]
     panels = (
         (("rss_mb",), "resident memory [MiB]"),
+        (("objects",), "live Python objects"),
         (("map_ms", "map_cpu_ms"), "mapping per frame [ms]"),
         (("control_ms", "control_cpu_ms"), "control per tick [ms]"),
-        (("objects",), "live Python objects"),
+        (("reference_cpu_ms",), "reference workload [ms]"),
+        (("map_per_reference", "control_per_reference"), "CPU time / reference"),
     )
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True, constrained_layout=True)
+    kinds = {
+        "map_per_reference": "mapping",
+        "control_per_reference": "control",
+        "reference_cpu_ms": "CPU",
+    }
+    fig, axes = plt.subplots(3, 2, figsize=(11, 10), sharex=True, constrained_layout=True)
     slopes = soak.get("slope_per_minute", {})
     growth = soak.get("growth", {})
     for ax, (keys, label) in zip(axes.ravel(), panels, strict=True):
         titles = []
         for key in keys:
-            kind = "CPU" if "cpu" in key else "wall"
-            ax.plot(minutes, [s[key] for s in samples], ".-", ms=3, label=kind)
+            kind = kinds.get(key, "CPU" if "cpu" in key else "wall")
+            ax.plot(minutes, [s.get(key, float("nan")) for s in samples], ".-", ms=3, label=kind)
             if key in slopes:
                 titles.append(f"{kind} {slopes[key]:+.3g}/min, {growth[key]:+.1%}")
         ax.set_ylabel(label)
@@ -79,7 +89,7 @@ def plot_soak(soak: dict, path: Path) -> Path:
                 "; ".join(titles) + f" (first to last {soak['window_minutes']:.3g} min)",
                 fontsize=8,
             )
-    for ax in axes[1]:
+    for ax in axes[-1]:
         ax.set_xlabel("wall time [min]")
     fig.suptitle(
         f"soak: {soak['minutes']:g} min of laps on {soak['terrain']}, {soak['laps']} laps, "

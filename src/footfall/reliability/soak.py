@@ -14,6 +14,13 @@ since the last sample (wall and CPU time: the CPU time does not change when othe
 processes share the machine), and the number of live Python objects. ``soak.json`` holds the
 samples, the slope of each over time (least squares, per minute) and its growth from the
 first to the last window (``window_minutes``, ten minutes, or a third of a shorter run).
+
+A machine's own speed drifts over an hour (a virtual machine shares its host: the same
+process measured 4.5 ms per frame at the start of one hour and 6.2 ms in a fresh process
+at its end), and CPU time drifts with it. So each sample also times a fixed workload,
+:class:`ReferenceWork` (the soak's first depth frame fused into an empty map and scored),
+and gives the per-frame and per-tick CPU times as ratios to it: the ratios grow only
+when the soak itself gets slower.
 """
 
 from __future__ import annotations
@@ -22,15 +29,17 @@ import gc
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from footfall.errors import ConfigError
-from footfall.messages import GaitState, WalkCommand
+from footfall.mapping.height_map import HeightMap, HeightMapConfig
+from footfall.messages import DepthFrame, GaitState, PoseEstimate, WalkCommand
 from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.runtime.bus import InProcessBus
 from footfall.runtime.scheduler import SimulatedScheduler
+from footfall.scoring.walkability import ScoreConfig, score_map
 from footfall.sim.task import TerrainTask
 from footfall.sim.terrain import make_terrain
 from footfall.sim.walk import SimRobot, WalkSettings
@@ -48,7 +57,19 @@ END_TOLERANCE = 0.15
 BACK_OFF_S = 3.0
 # A soak that stays frozen this long, backing off or not, has failed [s of walk time].
 FROZEN_LIMIT_S = 30.0
-QUANTITIES = ("rss_mb", "map_ms", "map_cpu_ms", "control_ms", "control_cpu_ms", "objects")
+# Runs of the reference workload at each sample; the fastest counts.
+REFERENCE_RUNS = 3
+QUANTITIES = (
+    "rss_mb",
+    "map_ms",
+    "map_cpu_ms",
+    "control_ms",
+    "control_cpu_ms",
+    "objects",
+    "reference_cpu_ms",
+    "map_per_reference",
+    "control_per_reference",
+)
 
 
 def resident_mb() -> float:
@@ -63,6 +84,43 @@ def resident_mb() -> float:
         import resource
 
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+@dataclass(frozen=True)
+class ReferenceWork:
+    """A fixed mapping workload: one depth frame fused into an empty map and scored.
+
+    Timed at every sample of a soak, it measures the machine's speed at that moment with
+    the same kernels the soak runs.
+
+    Args:
+        frame: The depth frame (the soak's first).
+        pose: Its pose estimate.
+        map_config: The map's configuration.
+        score_config: The scoring's configuration.
+    """
+
+    frame: DepthFrame
+    pose: PoseEstimate
+    map_config: HeightMapConfig
+    score_config: ScoreConfig
+
+    def cpu_ms(self) -> float:
+        """CPU time of the workload, the fastest of ``REFERENCE_RUNS`` [ms]."""
+        body = self.pose.body_in_world.position
+        best = math.inf
+        for _ in range(REFERENCE_RUNS):
+            height_map = HeightMap(self.map_config, centre=(float(body[0]), float(body[1])))
+            cpu0 = time.thread_time()
+            height_map.integrate_depth(
+                self.frame.depth,
+                self.frame.intrinsics,
+                self.pose.camera_in_world,
+                depth_scale=self.frame.depth_scale,
+            )
+            score_map(height_map.snapshot(), self.score_config)
+            best = min(best, 1e3 * (time.thread_time() - cpu0))
+        return best
 
 
 @dataclass
@@ -172,10 +230,18 @@ def run_soak(
     spec = spec or load_spec("default")
     settings = WalkSettings(terrain=terrain, seconds=1e9, blind=False)
     bus = InProcessBus()
+    first: dict[str, DepthFrame | PoseEstimate] = {}
+    bus.subscribe(DepthFrame.TOPIC, lambda m: first.setdefault("frame", m))
+    bus.subscribe(PoseEstimate.TOPIC, lambda m: first.setdefault("pose", m))
     ground = make_terrain(settings.terrain, seed=settings.seed)
     robot = SimRobot.build(spec, settings, ground, bus, log_ticks=LOG_TICKS)
     mapping = robot.mapping
     assert mapping is not None
+    frame, pose = first["frame"], first["pose"]  # the robot's first frame and its pose
+    assert isinstance(frame, DepthFrame) and isinstance(pose, PoseEstimate)
+    reference = ReferenceWork(
+        replace(frame, depth=np.array(frame.depth)), pose, settings.map, settings.score
+    )
     # The terrain task only judges (a fall, a robot frozen too long); the laps steer.
     judge = TerrainTask(bus, ground, settings.command, frozen_timeout=FROZEN_LIMIT_S)
     start, goal = np.array(ground.start, dtype=float), np.array(ground.goal, dtype=float)
@@ -230,6 +296,9 @@ def run_soak(
             "control_cpu_ms": float(np.mean(tick_cpu_ms)) if tick_cpu_ms else math.nan,
             "objects": float(len(gc.get_objects())),
         }
+        sample["reference_cpu_ms"] = reference.cpu_ms()
+        sample["map_per_reference"] = sample["map_cpu_ms"] / sample["reference_cpu_ms"]
+        sample["control_per_reference"] = sample["control_cpu_ms"] / sample["reference_cpu_ms"]
         tick_ms.clear()
         tick_cpu_ms.clear()
         samples.append(sample)
