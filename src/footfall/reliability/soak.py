@@ -7,12 +7,12 @@ an end puts feet beside the robot, where the camera never looked). So that those
 still in the rolling map on the way back, a lap stops short of the goal where the map
 window would have scrolled the start out (``LAP_SHARE`` of its half-width). A robot that freezes for
 want of a foothold backs off the way it came for a moment and tries again, as an operator
-would. The run keeps
-bounded logs (the per-tick record and the touchdowns as ring buffers). Every ``sample_seconds`` it
-samples the resident memory, the mean per-frame mapping time and per-tick control time
-since the last sample (wall and CPU time: the CPU time does not change when other
-processes share the machine), and the number of live Python objects. ``soak.json`` holds the
-samples, the slope of each over time (least squares, per minute) and its growth from the
+would. The run keeps bounded logs (the per-tick record and the touchdowns as ring
+buffers). Every ``sample_seconds`` it samples the resident memory, the mean per-frame
+mapping time and per-tick control time since the last sample (wall and CPU time: the CPU
+time leaves out the waits when other processes share the machine, though not a slower
+machine), and the number of live Python objects. ``soak.json`` holds the samples, the
+slope of each over time (least squares, per minute) and its growth from the
 first to the last window (``window_minutes``, ten minutes, or a third of a shorter run).
 
 A machine's own speed drifts over an hour (a virtual machine shares its host: the same
