@@ -218,10 +218,13 @@ class Guarded:
         error: Pose | None = None,
         start: float = 0.0,
         jitter_m: float = 0.0,
+        jitter_rad: float = 0.0,
+        seed: int = 7,
     ):
-        """Feed ``seconds`` of estimates from ``start`` on, each off by ``error`` and by
-        horizontal white noise of ``jitter_m``."""
-        rng = np.random.default_rng(7)
+        """Feed ``seconds`` of estimates from ``start`` on, each off by ``error``, by white
+        noise of ``jitter_m`` on the position (all three axes; the first two only when
+        ``jitter_rad`` is 0) and of ``jitter_rad`` on the heading."""
+        rng = np.random.default_rng(seed)
         for k in range(round(seconds * 15)):
             t = start + k / 15.0
             body = Pose(np.array([0.1 * t, 0.0, 0.2]), Rotation.identity())
@@ -231,9 +234,12 @@ class Guarded:
             imu = RobotState(t, zeros, zeros, Rotation.identity(), np.zeros(3))
             self.bus.publish(RobotState.TOPIC, imu)
             raw = body if error is None else error.compose(body)
-            if jitter_m:
+            if jitter_m and not jitter_rad:
                 noise = np.append(rng.normal(0.0, jitter_m, 2), 0.0)
                 raw = Pose(raw.position + noise, raw.rotation)
+            elif jitter_rad:
+                turn = Rotation.from_euler("z", rng.normal(0.0, jitter_rad))
+                raw = Pose(raw.position + rng.normal(0.0, jitter_m, 3), turn * raw.rotation)
             self.bus.publish(RAW_POSE_TOPIC, PoseEstimate(t, raw, raw))
 
 
@@ -259,6 +265,19 @@ def test_the_guard_takes_a_clean_estimate_and_averages_a_jittery_one():
     late = [p for p in jittery.out if p.stamp > 2.0]
     errors = [p.body_in_world.position[1] for p in late]  # the truth is y = 0
     assert np.std(errors) < 0.3 * 0.006
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_jittery_estimate_is_no_jump_and_a_real_jump_still_is(seed):
+    """Five times the default SLAM jitter (1 cm on each axis, 0.6 degrees of heading)
+    lies near the fixed allowances; measured, it widens them and is never taken for a
+    jump, while a 10 cm / 5 degree jump on top of it still is."""
+    g = Guarded()
+    g.walk(8.0, jitter_m=0.01, jitter_rad=0.01, seed=seed)
+    assert g.guard.jumps == 0
+    jump = Pose(np.array([0.0, 0.1, 0.0]), Rotation.from_euler("z", 5.0, degrees=True))
+    g.walk(1.0, error=jump, start=8.0, jitter_m=0.01, jitter_rad=0.01, seed=seed + 10)
+    assert g.guard.jumps == 1
 
 
 @given(

@@ -12,6 +12,7 @@ from footfall.planning.footholds import (
     FootholdSearch,
     _eroded,
     point_in_polygon_margin,
+    registration_margin_cells,
     sorted_offsets,
 )
 from footfall.scoring.walkability import ScoreMap
@@ -24,12 +25,20 @@ def _score_map(valid: np.ndarray, score: np.ndarray) -> ScoreMap:
     return ScoreMap(nan, nan, score, valid, (0.0, 0.0), RES)
 
 
-@given(st.integers(0, 2**32 - 1), st.floats(0.0, 1.0), st.integers(0, 2), st.integers(0, 2))
+@given(
+    st.integers(0, 2**32 - 1),
+    st.floats(0.0, 1.0),
+    st.integers(0, 2),
+    st.integers(0, 2),
+    st.integers(0, 3),
+)
 @settings(max_examples=150, deadline=None)
-def test_search_returns_the_nearest_acceptable_cell(seed, density, margin, fallback):
+def test_search_returns_the_nearest_acceptable_cell(seed, density, margin, fallback, floor):
     """Cross-check against brute force: the nearest valid cell with the full edge margin
-    within the radius, ties by score, else the nearest with the next narrower margin; never
-    an invalid or unknown cell; None when there is none."""
+    within the radius, ties by score, else the nearest with the next narrower margin, never
+    narrower than the search's least margin (``min_margin_cells``, the map's possible
+    misregistration) and wider first when that is wider; never an invalid or unknown cell;
+    None when there is none."""
     rng = np.random.default_rng(seed)
     valid = rng.uniform(size=(30, 30)) < density
     score = rng.uniform(0, 0.5, (30, 30))
@@ -41,10 +50,11 @@ def test_search_returns_the_nearest_acceptable_cell(seed, density, margin, fallb
     )
     search = FootholdSearch(config, RES)
     nominal = rng.uniform(0.1, 0.5, 2)
-    found = search.search(nominal, _score_map(valid, score), heights)
+    found = search.search(nominal, _score_map(valid, score), heights, min_margin_cells=floor)
     centre = np.floor(nominal / RES).astype(int)
     best = None
-    for m in range(margin, least - 1, -1):
+    lowest = max(least, floor)
+    for m in range(max(margin, lowest), lowest - 1, -1):
         usable = _eroded(valid, m)
         for i in range(30):
             for j in range(30):
@@ -61,6 +71,15 @@ def test_search_returns_the_nearest_acceptable_cell(seed, density, margin, fallb
         assert found is not None and found.cell == best[1]
         assert valid[found.cell]
         assert found.position[2] == heights[found.cell]
+
+
+@given(st.floats(0.0, 0.2), st.sampled_from([0.01, 0.02, 0.05]))
+def test_a_registration_margin_keeps_the_foot_centre_that_far_from_invalid_cells(error, res):
+    """A margin of m cells puts the foot centre (m + 0.5) cells from the nearest invalid
+    cell; the margin for an error is the least that covers it."""
+    m = registration_margin_cells(error, res)
+    assert (m + 0.5) * res >= error - 1e-12
+    assert m == 0 or (m - 0.5) * res < error
 
 
 def test_valid_nominal_cell_keeps_the_nominal_position():

@@ -38,6 +38,7 @@ from footfall.motion.foothold_policy import (
 from footfall.motion.gait import GaitConfig
 from footfall.motion.gait_scheduler import GaitScheduler
 from footfall.motion.leg_solver import FootTargets, LegSolver
+from footfall.motion.registration import RegistrationDrift
 from footfall.motion.safety import SafetyMonitor
 from footfall.motion.stroke_governor import StrokeGovernor
 from footfall.motion.swing import FlowSwing, PolynomialArcSwing, SwingTrajectory, time_to_land
@@ -83,6 +84,9 @@ class WalkController:
         self._rest_in_body = spec.rest_feet_in_body(0.0)  # xy of rest feet; z set per use
         self.footholds: FootholdPolicy = (
             BlindFootholds() if planner is None else MappedFootholds(planner, spec.foot_radius)
+        )
+        self.registration = (
+            RegistrationDrift(planner.config.registration_horizon_s) if planner else None
         )
         self.shaper = CommandShaper(self.config, self.height)
         self.scheduler = GaitScheduler(
@@ -214,6 +218,11 @@ class WalkController:
         translation = np.array([estimate.x, estimate.y]) - rotation @ np.array(
             [self.pose.x, self.pose.y]
         )
+        if self.registration is not None and self.planner is not None:
+            self.registration.add(
+                self._time or 0.0, estimate.x - self.pose.x, estimate.y - self.pose.y
+            )
+            self.planner.registration_error_m = self.registration.error_m
         feet, self.feet_in_world = self.feet_in_world, self.feet_in_world.copy()
         self.feet_in_world[..., :2] = feet[..., :2] @ rotation.T + translation
         self.solver.rotate(rotation)

@@ -25,7 +25,9 @@ A verdict that does not come within ``VERDICT_WAIT_S`` (no frame, or a map that 
 the two apart: flat ground) lets the re-registration stand.
 
 A jump smaller than the allowance passes (a few centimetres, two degrees): the height map's
-drift compensation takes its vertical part.
+drift compensation takes its vertical part. A jittery estimate widens the allowance to
+several times its own measured scatter, so that its noise is not taken for jumps (each
+false re-registration would shift the map under the feet).
 
 The guard also fuses what passes with the robot's own senses, as a legged robot's state
 estimator does: the body's tilt is the IMU's (gravity is a better reference for roll and
@@ -34,9 +36,15 @@ odometry's prediction towards the estimate by a gain each estimate. The gain is 
 Kalman gain of a random walk (odometry's error per estimate, ``odometry_noise_m``) measured
 by the estimate, whose noise the guard measures as it goes (the scatter of the estimates'
 motion about odometry's): a clean estimate is taken almost as is, a jittery one is averaged
-over many frames while its slow drift is still followed. The map then stays consistent
-over the seconds between seeing a cell and stepping on it (at three times the default SLAM
-noise, following the estimate frame by frame puts feet in the cobblestones' grooves).
+over many frames while its slow drift is still followed. What the feet need is not the
+truest pose but one that stays consistent with the map over the four or five seconds
+between the camera seeing a cell and a hind foot stepping on it: every centimetre the
+published pose follows the estimate's drift in that time is a centimetre the map moves
+under the feet. The odometry's error per estimate is therefore taken small (0.1 mm: the
+walking robot's legs move its body as commanded to a fraction of a millimetre per
+estimate, slowly biased), and a drifting estimate is followed over many seconds (at three
+times the default SLAM noise, the gain a 0.3 mm odometry error gives lets the map slide
+two to four centimetres under a hind foot and puts feet in the cobblestones' grooves).
 Height is left to the map's drift compensation.
 """
 
@@ -70,7 +78,9 @@ class PoseGuardConfig:
     """How far an estimate may move from the odometry's prediction.
 
     An allowance is a constant plus a rate times the time since the last accepted estimate
-    (odometry error grows while no estimate comes).
+    (odometry error grows while no estimate comes), or ``jump_sigmas`` times the scatter
+    the guard measures in the estimates' motion about odometry's, when that is wider: a
+    jittery estimate's own noise is never taken for a jump.
 
     Attributes:
         position_m: Horizontal and vertical allowance [m].
@@ -80,6 +90,8 @@ class PoseGuardConfig:
         odometry_noise_m: Odometry's horizontal error per estimate [m], for the gain.
         min_gain: The smallest share of the estimate taken per estimate.
         noise_memory: Estimates over which the estimate's noise is averaged.
+        jump_sigmas: An allowance is at least this many standard deviations of the
+            measured scatter (horizontal, vertical and heading apart).
         imu_tilt: Take the body's roll and pitch from the IMU.
     """
 
@@ -87,9 +99,10 @@ class PoseGuardConfig:
     position_rate_mps: float = 0.1
     angle_deg: float = 2.0
     angle_rate_dps: float = 2.0
-    odometry_noise_m: float = 0.0003
+    odometry_noise_m: float = 0.0001
     min_gain: float = 0.01
     noise_memory: int = 20
+    jump_sigmas: float = 5.0
     imu_tilt: bool = True
 
     def __post_init__(self) -> None:
@@ -105,6 +118,10 @@ class PoseGuardConfig:
             raise ConfigError(f"pose guard min_gain must lie in (0, 1], got {self.min_gain}")
         if self.noise_memory < 1:
             raise ConfigError(f"pose guard noise_memory must be >= 1, got {self.noise_memory}")
+        if not (math.isfinite(self.jump_sigmas) and self.jump_sigmas > 0):
+            raise ConfigError(
+                f"pose guard jump_sigmas must be a positive number, got {self.jump_sigmas}"
+            )
 
 
 def heading(rotation: Rotation) -> float:
@@ -149,7 +166,12 @@ class PoseGuardNode:
         self._odometry: PlanarPose | None = None
         self._odometry_then: PlanarPose | None = None  # odometry as the last one went out
         self._attitude: Rotation | None = None
-        self._scatter = 0.0  # mean square of the estimates' motion about odometry's [m^2]
+        # Mean squares of the estimates' motion about odometry's: horizontal (per axis) and
+        # vertical [m^2], heading [rad^2]; over ``_measured`` estimates so far.
+        self._scatter = 0.0
+        self._scatter_z = 0.0
+        self._scatter_yaw = 0.0
+        self._measured = 0
         self.gain = 1.0
         self.refuted = 0  # re-registrations the map undid
         self._latest_raw: PoseEstimate | None = None
@@ -188,7 +210,7 @@ class PoseGuardNode:
                     self._reregister(raw, last, predicted, jump)
                     estimate = self._corrected(raw)
                 else:
-                    self._measure(estimate, predicted)
+                    self._measure(estimate, last, predicted)
             published = self._fused(estimate, odometry)
             if self._undo is not None:
                 # Before the corrected estimate: a frame waiting for its pose finds both.
@@ -247,12 +269,22 @@ class PoseGuardNode:
             wrap(yaw + wrap(now.yaw - then.yaw)),
         )
 
-    def _measure(self, estimate: PoseEstimate, predicted: PlanarPose) -> None:
-        """Update the estimate's measured noise, and the gain it gives."""
+    def _measure(self, estimate: PoseEstimate, last: PoseEstimate, predicted: PlanarPose) -> None:
+        """Update the estimate's measured noise, and the gain it gives.
+
+        The first ``noise_memory`` estimates are averaged evenly, later ones exponentially.
+        """
         c = self.config
-        p = estimate.body_in_world.position
+        body = estimate.body_in_world
+        p = body.position
+        self._measured += 1
+        share = 1.0 / min(self._measured, c.noise_memory)
         square = 0.5 * ((float(p[0]) - predicted.x) ** 2 + (float(p[1]) - predicted.y) ** 2)
-        self._scatter += (square - self._scatter) / c.noise_memory
+        self._scatter += (square - self._scatter) * share
+        rise = float(p[2] - last.body_in_world.position[2])
+        self._scatter_z += (rise * rise - self._scatter_z) * share
+        turn = wrap(heading(body.rotation) - predicted.yaw)
+        self._scatter_yaw += (turn * turn - self._scatter_yaw) * share
         q = c.odometry_noise_m**2
         # The motion between two estimates carries two of their errors and one of odometry's.
         r = max(0.5 * (self._scatter - q), 0.0)
@@ -281,8 +313,14 @@ class PoseGuardNode:
         """Why ``estimate`` is a jump from the prediction, or None when it is not."""
         c = self.config
         body = estimate.body_in_world
-        position_limit = c.position_m + c.position_rate_mps * elapsed
-        angle_limit = math.radians(c.angle_deg + c.angle_rate_dps * elapsed)
+        k = c.jump_sigmas
+        fixed = c.position_m + c.position_rate_mps * elapsed
+        # A 2-D residual of per-axis variance s passes k sqrt(s) with odds exp(-k^2 / 2).
+        position_limit = max(fixed, k * math.sqrt(self._scatter))
+        vertical_limit = max(fixed, k * math.sqrt(self._scatter_z))
+        angle_limit = max(
+            math.radians(c.angle_deg + c.angle_rate_dps * elapsed), k * math.sqrt(self._scatter_yaw)
+        )
         horizontal = math.hypot(body.position[0] - predicted.x, body.position[1] - predicted.y)
         vertical = abs(float(body.position[2] - last.body_in_world.position[2]))
         turn = abs(wrap(heading(body.rotation) - predicted.yaw))
@@ -293,7 +331,7 @@ class PoseGuardNode:
             if self._attitude is not None and not c.imu_tilt
             else 0.0
         )
-        if horizontal > position_limit or vertical > position_limit:
+        if horizontal > position_limit or vertical > vertical_limit:
             return f"moved {horizontal:.3f} m across and {vertical:.3f} m up beyond odometry"
         if turn > angle_limit or tilt > angle_limit:
             return (

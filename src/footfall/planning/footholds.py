@@ -54,11 +54,6 @@ class FootholdConfig:
         if not 0 <= self.min_edge_margin_cells <= self.edge_margin_cells:
             raise ConfigError("edge margins need 0 <= min_edge_margin_cells <= edge_margin_cells")
 
-    @property
-    def edge_margins(self) -> tuple[int, ...]:
-        """Edge margins tried in turn [cells], widest first."""
-        return tuple(range(self.edge_margin_cells, self.min_edge_margin_cells - 1, -1))
-
 
 def sorted_offsets(radius_cells: float) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
     """Cell offsets within a radius, nearest first.
@@ -115,6 +110,18 @@ def _convex_hull(points: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
             upper.pop()
         upper.append(p)
     return np.array(lower[:-1] + upper[:-1])
+
+
+def registration_margin_cells(error_m: float, resolution: float) -> int:
+    """The edge margin [cells] that keeps a foot off invalid cells the map may have moved.
+
+    A candidate with a margin of ``m`` cells has its centre at least ``(m + 0.5)`` cells
+    from any invalid cell; a map that lies up to ``error_m`` off where the controller's
+    world puts it needs ``(m + 0.5) * resolution >= error_m``.
+    """
+    if not (math.isfinite(error_m) and error_m > 0.5 * resolution):
+        return 0
+    return min(math.ceil(error_m / resolution - 0.5), MAX_SEARCH_CELLS)
 
 
 def _eroded(valid: npt.NDArray[np.bool_], cells: int) -> npt.NDArray[np.bool_]:
@@ -182,11 +189,13 @@ class FootholdSearch:
         heights: npt.NDArray[np.float64],
         accept: Callable[[npt.NDArray[np.float64]], bool] | None = None,
         first_accepted: Callable[[npt.NDArray[np.float64]], int] | None = None,
+        min_margin_cells: int = 0,
     ) -> Foothold | None:
         """The nearest acceptable cell to a nominal foot position.
 
         Cells with the full edge margin are searched first; the narrower margins only when
-        none of those passes.
+        none of those passes, down to the configured least margin or ``min_margin_cells``,
+        whichever is wider (a map that may lie off where the feet think it is).
 
         Args:
             nominal_xy: Nominal foot position in the world, shape (2,) [m].
@@ -197,6 +206,7 @@ class FootholdSearch:
             first_accepted: The same test for many candidates at once, for speed: given
                 ground points in search order, shape (m, 3), the index of the first that
                 passes, or -1. Used instead of ``accept`` when given.
+            min_margin_cells: The least edge margin this search accepts [cells].
 
         Returns:
             The foothold, or None when no cell within the radius passes.
@@ -219,7 +229,8 @@ class FootholdSearch:
                     return 0 if len(points) else -1
                 return next((k for k, p in enumerate(points) if accept(p)), -1)
 
-        for margin in self.config.edge_margins:
+        least = max(self.config.min_edge_margin_cells, int(min_margin_cells))
+        for margin in range(max(self.config.edge_margin_cells, least), least - 1, -1):
             ok = self._eroded(scores, margin)[cells[:, 0], cells[:, 1]] & ~tried
             tried |= ok
             candidates, candidate_distances = cells[ok], distances[ok]

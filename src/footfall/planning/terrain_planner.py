@@ -9,6 +9,7 @@ terrain under a swing path, which the path must clear.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,7 +17,12 @@ import numpy.typing as npt
 
 from footfall.errors import ConfigError
 from footfall.mapping.height_map import MapSnapshot
-from footfall.planning.footholds import FootholdConfig, FootholdSearch, point_in_polygon_margin
+from footfall.planning.footholds import (
+    FootholdConfig,
+    FootholdSearch,
+    point_in_polygon_margin,
+    registration_margin_cells,
+)
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
@@ -36,6 +42,11 @@ class TerrainPlannerConfig:
             under it when the legs allow [m].
         min_body_clearance: Least gap, never given up: a foothold that needs a lower body
             is refused [m].
+        registration_horizon_s: How long a mapped cell stays in use: from the camera
+            seeing it ahead of the front legs until the hind feet have stepped past it
+            (body length and look-ahead over the walking speed) [s]. The map may slide
+            under the feet by as much as the controller's world moved against its
+            odometry over this time (see :attr:`TerrainPlanner.registration_error_m`).
     """
 
     footholds: FootholdConfig = field(default_factory=FootholdConfig)
@@ -43,10 +54,16 @@ class TerrainPlannerConfig:
     swing_clearance: float = 0.03
     body_clearance: float = 0.03
     min_body_clearance: float = 0.01
+    registration_horizon_s: float = 5.0
 
     def __post_init__(self) -> None:
         if min(self.reach_margin, self.swing_clearance, self.min_body_clearance) < 0:
             raise ConfigError("planner margins must be >= 0")
+        if not (math.isfinite(self.registration_horizon_s) and self.registration_horizon_s > 0):
+            raise ConfigError(
+                "registration_horizon_s must be a positive number of seconds, got "
+                f"{self.registration_horizon_s}"
+            )
         if self.body_clearance < self.min_body_clearance:
             raise ConfigError("body_clearance must be at least min_body_clearance")
 
@@ -111,6 +128,13 @@ class TerrainPlanner:
     Args:
         spec: The robot.
         config: Planner settings.
+
+    Attributes:
+        registration_error_m: How far the map may lie from where the controller's world
+            puts it [m]: the controller's world follows a drifting pose estimate, and a
+            cell mapped seconds ago moved with the estimate of that time. Footholds keep at
+            least this far from invalid cells (:func:`registration_margin_cells`); the
+            walking controller sets it from its pose corrections.
     """
 
     def __init__(self, spec: HexapodSpec, config: TerrainPlannerConfig | None = None) -> None:
@@ -120,6 +144,7 @@ class TerrainPlanner:
         self.snapshot: MapSnapshot | None = None
         self.scores: ScoreMap | None = None
         self.version = 0
+        self.registration_error_m = 0.0
         self._search: FootholdSearch | None = None
 
     def update(self, snapshot: MapSnapshot, scores: ScoreMap) -> None:
@@ -199,6 +224,7 @@ class TerrainPlanner:
         targets = feet.copy()
         targets[swinging] = nominal[swinging]
         adjusted = np.zeros(6, dtype=bool)
+        least_margin = registration_margin_cells(self.registration_error_m, self._search.resolution)
         # A foothold is reached from the body now (it may stop at any time) to lift-off.
         reach_poses = (poses.now, poses.touchdown, poses.liftoff)
         for leg in (int(k) for k in np.flatnonzero(swinging)):
@@ -233,11 +259,18 @@ class TerrainPlanner:
                 self.scores,
                 self.snapshot.heights,
                 first_accepted=first_accepted,
+                min_margin_cells=least_margin,
             )
             if foothold is None:
+                drift = (
+                    f" at least {least_margin} cells from invalid ones (the map may lie "
+                    f"{self.registration_error_m:.3f} m off)"
+                    if least_margin > c.footholds.min_edge_margin_cells
+                    else ""
+                )
                 return NoFoothold(
-                    f"leg {self.spec.leg_names[leg]}: no valid, reachable and stable cell "
-                    f"within {c.footholds.search_radius:.2f} m of its nominal foothold "
+                    f"leg {self.spec.leg_names[leg]}: no valid, reachable and stable cell"
+                    f"{drift} within {c.footholds.search_radius:.2f} m of its nominal foothold "
                     f"({nominal[leg, 0]:.2f}, {nominal[leg, 1]:.2f}) m",
                     self.spec.leg_names[leg],
                 )

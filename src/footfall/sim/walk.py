@@ -311,6 +311,8 @@ class SimRobot:
             b == frozen and a != frozen for a, b in itertools.pairwise(log.state)
         )
         metrics["stale_stops"] = self.graph.movement.stops
+        if controller.registration is not None:
+            metrics["registration_error_max_m"] = controller.registration.largest_m
         if self.guard is not None:
             metrics["pose_jumps_detected"] = self.guard.jumps
             metrics["pose_jumps_refuted"] = self.guard.refuted
