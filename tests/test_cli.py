@@ -188,27 +188,34 @@ def test_map_bad_tum_folder_is_a_clear_error(tmp_path, capsys):
     assert "depth" in capsys.readouterr().out
 
 
-def test_bench_terrain_writes_its_table_and_chart(tmp_path, monkeypatch):
-    """`footfall bench terrain` writes bench.json (per configuration and overall rates) and
-    bench.png; walks run in parallel processes with --jobs give the same outcomes."""
+def test_bench_terrain_writes_its_table_and_chart(tmp_path, monkeypatch, capsys):
+    """`footfall bench terrain` writes bench.json (per configuration and mode, and the
+    overall rates of each mode) and bench.png for the terrains asked for; walks run in
+    parallel processes with --jobs give the same outcomes; an unknown terrain is named."""
     import footfall.benchmarking
 
-    monkeypatch.setattr(footfall.benchmarking, "TERRAIN_SWEEP", (("stairs", "rise", (0.04,)),))
+    sweep = (("stairs", "rise", (0.04,)), ("dead_end", "length", (1.8,)), ("gaps", "width", (0.1,)))
+    monkeypatch.setattr(footfall.benchmarking, "TERRAIN_SWEEP", sweep)
     outs = []
     for jobs in ("1", "2"):
         out = tmp_path / f"jobs{jobs}"
         args = ["bench", "terrain", "--seeds", "1", "--seconds", "1", "--jobs", jobs]
-        assert main([*args, "--out", str(out)]) == 0
+        assert main([*args, "--terrains", "stairs,dead_end", "--out", str(out)]) == 0
         assert (out / "bench.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         outs.append(json.loads((out / "bench.json").read_text()))
     serial, parallel = outs
-    assert [r["mode"] for r in serial["results"]] == ["planned", "blind"]
+    assert [(r["terrain"], r["mode"]) for r in serial["results"]] == [
+        (t, m) for t in ("stairs", "dead_end") for m in ("planned", "straight", "blind")
+    ]
     assert all(r["runs"] == 1 for r in serial["results"])
-    assert {"planned_success_rate", "blind_success_rate"} <= serial.keys()
+    assert {"planned_success_rate", "straight_success_rate", "blind_success_rate"} <= serial.keys()
     for a, b in zip(serial["results"], parallel["results"], strict=True):
         assert {k: v for k, v in a.items() if k != "wall_seconds"} == {
             k: v for k, v in b.items() if k != "wall_seconds"
         }
+    capsys.readouterr()
+    assert main(["bench", "terrain", "--terrains", "stairs,nowhere", "--out", str(tmp_path)]) == 2
+    assert "nowhere" in capsys.readouterr().out
 
 
 def test_walk_paced_to_the_wall_clock(tmp_path):

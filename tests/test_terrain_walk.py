@@ -102,10 +102,11 @@ class Wall(Terrain):
 
 
 def test_walking_into_an_impassable_wall_freezes_safely():
-    """A command straight into a wall ends frozen in front of it, standing, with the leg
-    and the reason named, and no foot on an invalid cell."""
+    """Held to the straight line (the thesis' behaviour), a walk into a wall ends frozen in
+    front of it, standing, with the leg and the reason named, and no foot on an invalid
+    cell."""
     settings = WalkSettings(
-        terrain="flat", seconds=25.0, blind=False, command=WalkCommand(speed=0.1)
+        terrain="flat", seconds=25.0, blind=False, command=WalkCommand(speed=0.1), straight=True
     )
     result = simulate_walk(SPEC, settings, terrain=Wall())
     m = result.metrics
@@ -116,3 +117,21 @@ def test_walking_into_an_impassable_wall_freezes_safely():
     body = result.log.array("body_position_in_world")[-1]
     assert body[0] < 0.7  # stopped in front of the wall
     assert not result.log.array("swinging")[-1].any()  # all feet down
+
+
+def test_a_navigating_robot_goes_round_the_wall_to_the_goal():
+    """With route planning the same wall is gone round: the goal beyond it is reached, no
+    fall, no foot on an invalid cell, and the body never came within the legs' span of the
+    wall."""
+    settings = WalkSettings(
+        terrain="flat", seconds=90.0, blind=False, command=WalkCommand(speed=0.1), stop_at_goal=True
+    )
+    result = simulate_walk(SPEC, settings, terrain=Wall())
+    m = result.metrics
+    assert m["reached_goal"] and not m["fell"], m
+    assert m["invalid_footholds"] == 0
+    body = result.log.array("body_position_in_world")[:, :2]
+    beside = np.hypot(
+        np.maximum(np.abs(body[:, 0] - 0.8) - 0.1, 0.0), np.maximum(np.abs(body[:, 1]) - 1.0, 0.0)
+    )
+    assert beside.min() > 0.25

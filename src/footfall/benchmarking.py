@@ -1,9 +1,13 @@
-"""Mapping benchmark: depth frame -> points -> map update, and scoring a map.
+"""Benchmarks: the mapping speed, and walking over the terrain sweep.
 
-Each figure is measured against a plain-NumPy baseline in the same run (the
-:mod:`footfall.mapping.reference` and :mod:`footfall.scoring.reference` code), so the
-ratios hold on any machine. The depth frame is synthetic and deterministic: a
-640 x 480 camera 0.3 m above a floor scattered with boxes, looking ahead and down.
+Mapping: depth frame -> points -> map update, and scoring a map. Each figure is measured
+against a plain-NumPy baseline in the same run (the :mod:`footfall.mapping.reference` and
+:mod:`footfall.scoring.reference` code), so the ratios hold on any machine. The depth frame
+is synthetic and deterministic: a 640 x 480 camera 0.3 m above a floor scattered with
+boxes, looking ahead and down.
+
+Terrain sweep: every terrain over its difficulty range, walked planned (with route
+planning), straight (the same loop on the straight line, the thesis' behaviour) and blind.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
+from footfall.errors import ConfigError
 from footfall.mapping.height_map import HeightMap, HeightMapConfig
 from footfall.mapping.reference import integrate_depth_latest
 from footfall.scoring.reference import score_grid_numpy
@@ -135,7 +140,39 @@ TERRAIN_SWEEP: tuple[tuple[str, str, tuple[float, ...]], ...] = (
     ("stairs", "rise", (0.02, 0.04, 0.06, 0.08)),
     ("cobblestones", "groove", (0.01, 0.03, 0.06)),
     ("course", "none", (0.0,)),
+    ("stepping_stones", "gap", (0.04, 0.08, 0.12)),
+    ("gaps", "width", (0.05, 0.1, 0.15)),
+    ("boxes", "box_height", (0.04, 0.08, 0.12)),
+    ("ramps", "slope_deg", (10.0, 20.0, 30.0)),
+    ("pits", "depth", (0.05, 0.1, 0.2)),
+    ("obstacle_field", "density", (0.1, 0.2, 0.3)),
+    ("dead_end", "length", (1.8,)),
 )
+# The modes: the full loop with route planning, the same on the straight line (the
+# thesis' behaviour), and the blind baseline.
+TERRAIN_MODES = ("planned", "straight", "blind")
+# Terrains with no route to the goal: a run succeeds by standing still and saying why.
+NO_ROUTE_TERRAINS = ("dead_end",)
+
+
+def terrain_sweep(
+    terrains: Sequence[str] | None = None,
+) -> tuple[tuple[str, str, tuple[float, ...]], ...]:
+    """The sweep's entries for the named terrains (all by default), in the sweep's order.
+
+    Raises:
+        ConfigError: On a name the sweep does not hold.
+    """
+    if terrains is None:
+        return TERRAIN_SWEEP
+    known = {name for name, _, _ in TERRAIN_SWEEP}
+    unknown = [t for t in terrains if t not in known]
+    if unknown:
+        raise ConfigError(
+            f"no terrain {', '.join(map(repr, unknown))} in the sweep; choose from "
+            f"{', '.join(name for name, _, _ in TERRAIN_SWEEP)}"
+        )
+    return tuple(entry for entry in TERRAIN_SWEEP if entry[0] in terrains)
 
 
 def _terrain_run(job: tuple[str, str, float, str, int, float]) -> dict[str, object]:
@@ -147,17 +184,35 @@ def _terrain_run(job: tuple[str, str, float, str, int, float]) -> dict[str, obje
     name, difficulty, value, mode, seed, seconds = job
     params = {} if difficulty == "none" else {difficulty: value}
     settings = WalkSettings(
-        terrain=name, seconds=seconds, blind=mode == "blind", seed=seed, stop_at_goal=True
+        terrain=name,
+        seconds=seconds,
+        blind=mode == "blind",
+        straight=mode == "straight",
+        seed=seed,
+        stop_at_goal=True,
     )
     terrain = make_terrain(name, seed, **params)
     m = simulate_walk(load_spec("default"), settings, terrain=terrain).metrics
+    safe = not m["fell"] and m["invalid_footholds"] == 0
+    no_route = bool(m.get("no_route", False))
+    if name in NO_ROUTE_TERRAINS:
+        # Standing still with the reason: the navigator's "no route", or a freeze that
+        # says why (the thesis' robot at a wall).
+        success = safe and not m["reached_goal"] and (no_route or bool(m["frozen"]))
+    else:
+        success = safe and bool(m["reached_goal"])
     return {
-        "success": bool(m["reached_goal"]) and not m["fell"] and m["invalid_footholds"] == 0,
+        "success": success,
         "fell": bool(m["fell"]),
         "invalid_footholds": int(m["invalid_footholds"]),
         "frozen": bool(m["frozen"]),
+        "no_route": no_route,
+        "reason": str(m.get("no_route_reason") or m.get("frozen_reason") or ""),
         "tilt_max_deg": float(m["tilt_max_deg"]),
+        "sim_seconds": float(m["sim_seconds"]),
         "wall_seconds": float(m["wall_seconds"]),
+        "replan_ms_median": float(m.get("replan_ms_median", float("nan"))),
+        "replan_ms_p95": float(m.get("replan_ms_p95", float("nan"))),
     }
 
 
@@ -187,31 +242,40 @@ def run_parallel(
 
 def run_terrain_benchmark(
     seeds: int,
-    seconds: float = 90.0,
+    seconds: float = 150.0,
     on_run: Callable[[str], None] | None = None,
     jobs: int = 1,
+    terrains: Sequence[str] | None = None,
+    first_seed: int = 0,
 ) -> dict[str, object]:
-    """Planned and blind walking over the terrain sweep, ``seeds`` runs per configuration.
+    """The terrain sweep in every mode, ``seeds`` runs per configuration.
 
-    Success = reached the goal, no fall, zero invalid footholds.
+    Success = reached the goal, no fall, zero invalid footholds; on a terrain without a
+    route (``NO_ROUTE_TERRAINS``): stood still and said why, no fall, zero invalid.
 
     Args:
         seeds: Runs per terrain, difficulty and mode.
         seconds: Longest walk [s].
         on_run: Called with a label after each run (progress display).
         jobs: Walks simulated at once, each in its own process.
+        terrains: Terrains of the sweep to walk (all by default).
+        first_seed: The seeds run from this one up.
 
     Returns:
-        Per configuration: runs, successes, falls, invalid footholds, frozen runs, median
-        tilt, wall time; overall ``planned_success_rate`` and ``blind_success_rate``.
+        Per configuration (``results``): runs, successes, falls, invalid footholds, frozen
+        runs, runs without a route, median tilt, the reasons given, wall time; overall
+        ``planned_success_rate``, ``straight_success_rate`` and ``blind_success_rate``;
+        and the route planner's replan times over the planned runs.
     """
+    sweep = terrain_sweep(terrains)
     configs = [
         (name, difficulty, value, mode)
-        for name, difficulty, values in TERRAIN_SWEEP
+        for name, difficulty, values in sweep
         for value in values
-        for mode in ("planned", "blind")
+        for mode in TERRAIN_MODES
     ]
-    work = [(*config, seed, seconds) for config in configs for seed in range(seeds)]
+    seed_range = range(first_seed, first_seed + seeds)
+    work = [(*config, seed, seconds) for config in configs for seed in seed_range]
 
     def done(job: tuple) -> None:
         if on_run is not None:
@@ -221,7 +285,7 @@ def run_terrain_benchmark(
     runs = run_parallel(_terrain_run, work, jobs, done)
     rows = []
     for config in configs:
-        outcomes = [runs[(*config, seed, seconds)] for seed in range(seeds)]
+        outcomes = [runs[(*config, seed, seconds)] for seed in seed_range]
         name, difficulty, value, mode = config
         rows.append(
             {
@@ -234,7 +298,11 @@ def run_terrain_benchmark(
                 "falls": sum(bool(o["fell"]) for o in outcomes),
                 "invalid_footholds": sum(int(o["invalid_footholds"]) for o in outcomes),
                 "frozen": sum(bool(o["frozen"]) for o in outcomes),
-                "median_tilt_max_deg": float(np.median([o["tilt_max_deg"] for o in outcomes])),
+                "no_route": sum(bool(o["no_route"]) for o in outcomes),
+                "median_tilt_max_deg": float(np.median([o["tilt_max_deg"] for o in outcomes]))
+                if outcomes
+                else float("nan"),
+                "reasons": sorted({str(o["reason"]) for o in outcomes if o["reason"]}),
                 "wall_seconds": float(sum(o["wall_seconds"] for o in outcomes)),
             }
         )
@@ -243,14 +311,23 @@ def run_terrain_benchmark(
         mine = [r for r in rows if r["mode"] == mode]
         return sum(r["successes"] for r in mine) / max(sum(r["runs"] for r in mine), 1)
 
+    planned = [runs[job] for job in work if job[3] == "planned"]
+    medians = [o["replan_ms_median"] for o in planned if np.isfinite(o["replan_ms_median"])]
+    p95s = [o["replan_ms_p95"] for o in planned if np.isfinite(o["replan_ms_p95"])]
     return {
         "seeds": seeds,
+        "first_seed": first_seed,
+        "terrains": [name for name, _, _ in sweep],
         "results": rows,
         "planned_success_rate": rate("planned"),
+        "straight_success_rate": rate("straight"),
         "blind_success_rate": rate("blind"),
+        "replan_ms_median": float(np.median(medians)) if medians else float("nan"),
+        "replan_ms_p95_max": float(np.max(p95s)) if p95s else float("nan"),
     }
 
 
-def terrain_benchmark_runs(seeds: int) -> int:
+def terrain_benchmark_runs(seeds: int, terrains: Sequence[str] | None = None) -> int:
     """How many walks :func:`run_terrain_benchmark` makes."""
-    return 2 * seeds * sum(len(values) for _, _, values in TERRAIN_SWEEP)
+    sweep = terrain_sweep(terrains)
+    return len(TERRAIN_MODES) * seeds * sum(len(values) for _, _, values in sweep)

@@ -1,4 +1,8 @@
-"""Figures of a walk, in the style of the hexapod thesis (Fig. 8.2)."""
+"""Figures of a walk, in the style of the hexapod thesis (Fig. 8.2), and of the benchmarks.
+
+It is one module for every matplotlib figure the CLI writes, so the backend is set in one place
+and the figures share their styling.
+"""
 
 from __future__ import annotations
 
@@ -264,35 +268,57 @@ def plot_footholds(
     return save_figure(fig, path)
 
 
+# Units of the swept difficulty parameters, for axis labels.
+_DIFFICULTY_UNITS = {"slope_deg": "deg", "density": "share of area"}
+
+
 def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
-    """Success rate against difficulty for planned and blind walking, one panel a terrain."""
+    """Success rate against difficulty for each mode, one panel a terrain."""
     rows = bench["results"]
     terrains = list(dict.fromkeys(r["terrain"] for r in rows))
+    modes = list(dict.fromkeys(r["mode"] for r in rows))
+    columns = min(len(terrains), 4)
+    lines = -(-len(terrains) // columns)
     fig, axes = plt.subplots(
-        1, len(terrains), figsize=(4.5 * len(terrains), 4), constrained_layout=True
+        lines, columns, figsize=(4.2 * columns, 3.6 * lines), constrained_layout=True, squeeze=False
     )
-    for ax, terrain in zip(np.atleast_1d(axes), terrains, strict=True):
+    styles = {"planned": "o-", "straight": "^-.", "blind": "s--"}
+    for ax in axes.flat[len(terrains) :]:
+        ax.axis("off")
+    for ax, terrain in zip(axes.flat, terrains, strict=False):
         difficulty = next(r["difficulty"] for r in rows if r["terrain"] == terrain)
-        for k, (mode, style) in enumerate((("planned", "o-"), ("blind", "s--"))):
-            sel = [r for r in rows if r["terrain"] == terrain and r["mode"] == mode]
+        sel_all = [r for r in rows if r["terrain"] == terrain]
+        single = len({r["value"] for r in sel_all}) == 1
+        for k, mode in enumerate(modes):
+            sel = [r for r in sel_all if r["mode"] == mode]
             y = [r["successes"] / max(r["runs"], 1) for r in sel]
-            if difficulty == "none":  # one layout: a bar per mode
-                ax.bar([k], y, width=0.6, color=f"C{k}", label=mode)
+            falls = sum(r["falls"] for r in sel)
+            label = f"{mode} ({falls} falls)" if falls else mode
+            if single:  # one layout: a bar per mode
+                ax.bar([k], y, width=0.6, color=f"C{k}", label=label)
             else:
-                ax.plot([r["value"] for r in sel], y, style, label=mode)
+                ax.plot(
+                    [r["value"] for r in sel], y, styles.get(mode, "o-"), color=f"C{k}", label=label
+                )
         ax.set_title(terrain)
-        if difficulty == "none":
-            ax.set_xticks([0, 1], ["planned", "blind"])
-            ax.set_xlabel("(single layout)")
+        if single:
+            ax.set_xticks(range(len(modes)), modes)
+            value = sel_all[0]["value"]
+            ax.set_xlabel("(single layout)" if difficulty == "none" else f"{difficulty} {value:g}")
         else:
-            ax.set_xlabel(f"{difficulty} [m]")
+            ax.set_xlabel(f"{difficulty} [{_DIFFICULTY_UNITS.get(difficulty, 'm')}]")
         ax.set_ylabel("success rate")
         ax.set_ylim(-0.05, 1.05)
         ax.grid(alpha=0.3)
-        ax.legend()
+        ax.legend(fontsize=8)
+    rates = ", ".join(
+        f"{mode} {bench[f'{mode}_success_rate']:.0%}"
+        for mode in modes
+        if f"{mode}_success_rate" in bench
+    )
     fig.suptitle(
-        f"{bench['seeds']} seeds: planned {bench['planned_success_rate']:.0%}, "
-        f"blind {bench['blind_success_rate']:.0%} (success: goal, no fall, no invalid foothold)"
+        f"{bench['seeds']} seeds: {rates} (success: goal, no fall, no invalid foothold; "
+        "dead end: stood still and said why)"
     )
     return save_figure(fig, path)
 

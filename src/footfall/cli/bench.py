@@ -37,18 +37,31 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     mapping.set_defaults(handler=run_mapping)
     terrain = kinds.add_parser(
         "terrain",
-        help="planned against blind walking over a difficulty sweep",
+        help="planned, straight and blind walking over a difficulty sweep",
         description=(
-            "Walk stairs (rise 0.02-0.08 m), cobblestones (groove 0.01-0.06 m) and the course, "
-            "planned and blind, --seeds runs each; writes bench.json and bench.png to --out. "
-            "Success = reached the goal, no fall, zero invalid footholds."
+            "Walk every terrain over its difficulty range: stairs (rise 0.02-0.08 m), "
+            "cobblestones (groove 0.01-0.06 m), the course, stepping stones (gap), gaps "
+            "(width), boxes (height), ramps (slope), pits (depth), an obstacle field "
+            "(density) and a dead end; in three modes: planned (the full loop with route "
+            "planning), straight (the full loop on the straight line, the thesis' behaviour) "
+            "and blind; --seeds runs each. Writes bench.json and bench.png to --out. "
+            "Success = reached the goal, no fall, zero invalid footholds; on the dead end, "
+            "stood still and said why."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     terrain.add_argument(
         "--seeds", type=int, default=10, help="runs per terrain, difficulty and mode"
     )
-    terrain.add_argument("--seconds", type=float, default=90.0, help="longest walk in seconds")
+    terrain.add_argument("--seconds", type=float, default=150.0, help="longest walk in seconds")
+    terrain.add_argument(
+        "--terrains",
+        type=lambda text: [t.strip() for t in text.split(",") if t.strip()],
+        default=None,
+        metavar="NAME,NAME,...",
+        help="terrains of the sweep to walk (default: all)",
+    )
+    terrain.add_argument("--first-seed", type=int, default=0, help="the seeds run from this one up")
     terrain.add_argument(
         "--jobs", type=int, default=1, help="walks simulated at once, one process each"
     )
@@ -156,12 +169,15 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
     from footfall.reports.bench import run_terrain_bench
 
     with _progress(console, "walks") as progress:
-        task = progress.add_task("walking", total=terrain_benchmark_runs(max(args.seeds, 0)))
+        total = terrain_benchmark_runs(max(args.seeds, 0), args.terrains)
+        task = progress.add_task("walking", total=total)
         report = run_terrain_bench(
             args.seeds,
             args.seconds,
             jobs=args.jobs,
             on_run=lambda label: progress.update(task, advance=1, description=label),
+            terrains=args.terrains,
+            first_seed=args.first_seed,
         )
     paths = report.write(args.out)
     bench = report.to_json()
@@ -174,6 +190,7 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
         "falls",
         "invalid",
         "frozen",
+        "no route",
         "tilt (median)",
     ):
         table.add_column(column)
@@ -186,11 +203,15 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
             str(r["falls"]),
             str(r["invalid_footholds"]),
             str(r["frozen"]),
+            str(r["no_route"]),
             f"{r['median_tilt_max_deg']:.2f} deg",
         )
     console.print(table)
-    planned, blind = bench["planned_success_rate"], bench["blind_success_rate"]
-    console.print(f"planned success {planned:.0%}, blind {blind:.0%}")
+    console.print(
+        f"success: planned {bench['planned_success_rate']:.0%}, straight "
+        f"{bench['straight_success_rate']:.0%}, blind {bench['blind_success_rate']:.0%}; "
+        f"route replans {bench['replan_ms_median']:.1f} ms median"
+    )
     wrote(console, paths)
     return 0
 

@@ -31,6 +31,7 @@ SUMMARY = (
     ("swing apex (median)", "swing_apex_median_m", "{:.3f} m"),
     ("steps", "steps", "{}"),
     ("reached goal", "reached_goal", "{}"),
+    ("no route", "no_route", "{}"),
     ("distance to goal", "goal_distance_m", "{:.3f} m"),
     ("invalid footholds", "invalid_footholds", "{}"),
     ("footholds adjusted", "footholds_adjusted", "{}"),
@@ -42,7 +43,7 @@ SUMMARY = (
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``walk``."""
     from footfall.reports.walk import DEFAULT_SPEED_MPS
-    from footfall.sim.terrain import TERRAIN_NAMES
+    from footfall.sim.terrain import TERRAIN_DIFFICULTY, TERRAIN_NAMES
 
     p = subparsers.add_parser(
         "walk",
@@ -114,6 +115,30 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "--groove", type=float, help="cobblestones: groove width between stones in m (0.03)"
     )
     p.add_argument(
+        "--difficulty",
+        type=float,
+        help=(
+            "the terrain's difficulty parameter: "
+            + ", ".join(f"{t} {n}" for t, n in TERRAIN_DIFFICULTY.items())
+            + " (m, deg for slope_deg, a share for density)"
+        ),
+    )
+    p.add_argument(
+        "--straight",
+        action="store_true",
+        help=(
+            "walk the straight line from the start to the goal, as the thesis did, instead of "
+            "routes planned round what cannot be crossed"
+        ),
+    )
+    p.add_argument(
+        "--goal",
+        type=float,
+        nargs=2,
+        metavar=("X", "Y"),
+        help="goal in the world in m (default: the terrain's)",
+    )
+    p.add_argument(
         "--realtime",
         action="store_true",
         help="pace the control loop to the wall clock, as on a real robot (overruns counted)",
@@ -158,6 +183,9 @@ def run(args: argparse.Namespace, console: Console) -> int:
             seed=args.seed,
             rise=args.rise,
             groove=args.groove,
+            difficulty=args.difficulty,
+            straight=args.straight,
+            goal=tuple(args.goal) if args.goal is not None else None,
             realtime=args.realtime,
             record=args.record,
             rerun=args.rerun,
@@ -165,7 +193,12 @@ def run(args: argparse.Namespace, console: Console) -> int:
             faults=args.faults,
         )
     )
-    mode = "blind (thesis baseline)" if args.blind else "with camera, map and foothold planning"
+    if args.blind:
+        mode = "blind (thesis baseline)"
+    elif args.straight:
+        mode = "with camera, map and foothold planning, on the straight line"
+    else:
+        mode = "with camera, map, foothold planning and route planning"
     console.print(
         f"Walking robot [bold]{job.spec.name}[/] across [bold]{args.terrain}[/] terrain, {mode}: "
         f"{args.gait} gait at {job.speed:.3f} m/s, at most {args.seconds:g} s"
@@ -178,7 +211,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     print_table(
         console,
         "walk summary",
-        [(label, format_value(metrics[key], fmt)) for label, key, fmt in SUMMARY],
+        [(label, format_value(metrics[key], fmt)) for label, key, fmt in SUMMARY if key in metrics],
     )
     if "faults" in metrics:
         injected = ", ".join(
@@ -197,6 +230,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
         )
     elif metrics["fell"]:
         console.print("[red]The robot fell.[/]")
+    elif metrics.get("no_route"):
+        console.print(f"[yellow]The robot stood still:[/] {metrics['no_route_reason']}")
     elif metrics["frozen"]:
         console.print(f"[yellow]The robot froze safely:[/] {metrics['frozen_reason']}")
     else:

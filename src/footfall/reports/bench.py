@@ -59,16 +59,26 @@ def run_mapping_bench(repeats: int = 30) -> BenchReport:
 
 
 def run_terrain_bench(
-    seeds: int, seconds: float, jobs: int = 1, on_run: Callable[[str], None] | None = None
+    seeds: int,
+    seconds: float,
+    jobs: int = 1,
+    on_run: Callable[[str], None] | None = None,
+    terrains: Sequence[str] | None = None,
+    first_seed: int = 0,
 ) -> BenchReport:
-    """Planned against blind walking over the terrain sweep (see ``run_terrain_benchmark``)."""
+    """Planned, straight and blind walking over the terrain sweep (``run_terrain_benchmark``)."""
     from footfall.benchmarking import run_terrain_benchmark
 
     if seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {seeds}")
     if jobs < 1:
         raise ConfigError(f"--jobs must be at least 1, got {jobs}")
-    return BenchReport("terrain", run_terrain_benchmark(seeds, seconds, on_run=on_run, jobs=jobs))
+    return BenchReport(
+        "terrain",
+        run_terrain_benchmark(
+            seeds, seconds, on_run=on_run, jobs=jobs, terrains=terrains, first_seed=first_seed
+        ),
+    )
 
 
 def run_faults_bench(

@@ -13,7 +13,7 @@ from footfall.reports import write_json
 from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.runtime.fault_spec import FaultSpec
 from footfall.sim.model import CameraMount
-from footfall.sim.terrain import Terrain, make_terrain
+from footfall.sim.terrain import TERRAIN_DIFFICULTY, Terrain, make_terrain
 from footfall.sim.truth import TrueScores
 from footfall.sim.walk import WalkResult, WalkSettings, simulate_walk
 
@@ -42,6 +42,11 @@ class WalkRequest:
         seed: Terrain seed.
         rise: Stairs' step height [m], or None.
         groove: Cobblestones' groove width [m], or None.
+        difficulty: The terrain's difficulty parameter (see ``TERRAIN_DIFFICULTY``), or
+            None for its default.
+        straight: Walk the straight line to the goal (the thesis' behaviour) instead of
+            planned routes.
+        goal: Goal ``(x, y)`` in the world [m]; None for the terrain's.
         realtime: Pace the walk to the wall clock.
         record: An ``.mcap`` file to record every bus message to.
         rerun: An ``.rrd`` file to log the walk to for the rerun viewer.
@@ -63,6 +68,9 @@ class WalkRequest:
     seed: int = 0
     rise: float | None = None
     groove: float | None = None
+    difficulty: float | None = None
+    straight: bool = False
+    goal: tuple[float, float] | None = None
     realtime: bool = False
     record: Path | None = None
     rerun: Path | None = None
@@ -118,6 +126,18 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
             if request.terrain != kind:
                 raise ConfigError(f"--{name} applies to --terrain {kind} only")
             params[name] = value
+    if request.difficulty is not None:
+        name = TERRAIN_DIFFICULTY.get(request.terrain)
+        if name is None:
+            raise ConfigError(
+                f"terrain {request.terrain!r} has no difficulty parameter; terrains with one: "
+                f"{', '.join(TERRAIN_DIFFICULTY)}"
+            )
+        if name in params and params[name] != request.difficulty:
+            raise ConfigError(f"--difficulty and --{name} disagree")
+        params[name] = request.difficulty
+    if request.straight and request.blind:
+        raise ConfigError("--straight is for planned walking; a blind walk always goes straight")
     terrain = make_terrain(request.terrain, request.seed, **params)
     height = spec.body_height if request.height is None else request.height
     width, image_height = request.image_size
@@ -133,6 +153,8 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
         stop_at_goal=True,
         realtime=request.realtime,
         faults=FaultSpec.parse(request.faults),
+        straight=request.straight,
+        goal=request.goal,
     )
     return WalkJob(request, spec, settings, terrain, params)
 

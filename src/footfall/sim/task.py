@@ -1,10 +1,12 @@
 """The task of a simulated walk (dm_control's task): commands towards the goal, and the end.
 
-It steers the robot along the straight line from the terrain's start to its goal, aiming a
-little ahead on it, at the commanded speed; it stops commanding motion once the goal is
-reached. It decides when a run is over: a fall while walking (a limp robot in torque-off
-lying down has not fallen), the goal (when asked to stop there), or a robot frozen for
-``FROZEN_TIMEOUT`` seconds.
+With a navigator (:mod:`footfall.nodes.navigation`) it walks the routes the navigator plans
+on the map, round what cannot be crossed; without, it steers the robot along the straight
+line from the terrain's start to its goal, aiming a little ahead on it (the thesis'
+behaviour). Either way at the commanded speed, and it stops commanding motion once the goal
+is reached. It decides when a run is over: a fall while walking (a limp robot in torque-off
+lying down has not fallen), the goal (when asked to stop there), a robot frozen, or left
+without a route, for ``FROZEN_TIMEOUT`` seconds.
 """
 
 from __future__ import annotations
@@ -14,8 +16,10 @@ import math
 import numpy as np
 import numpy.typing as npt
 
+from footfall.errors import ConfigError
 from footfall.messages import GaitState, GaitStatus, Mode, ModeCommand, RobotState, WalkCommand
 from footfall.metrics import fallen
+from footfall.nodes.navigation import NavigatorNode
 from footfall.runtime.bus import Bus
 from footfall.sim.terrain import Terrain
 
@@ -36,8 +40,10 @@ class TerrainTask:
         terrain: The terrain (start, goal and the true ground for the fall rule).
         command: Speed and body height to walk at.
         stop_at_goal: End the run once the goal is reached.
-        frozen_timeout: End the run once the robot has been frozen this long [s]; None
-            never (an operator may still change its direction).
+        frozen_timeout: End the run once the robot has been frozen (or without a route)
+            this long [s]; None never (an operator may still change its direction).
+        goal: Goal ``(x, y)`` in the world [m]; the terrain's by default.
+        navigator: Plans the routes walked; None walks the straight line.
     """
 
     name = "task"
@@ -49,6 +55,8 @@ class TerrainTask:
         command: WalkCommand,
         stop_at_goal: bool = False,
         frozen_timeout: float | None = FROZEN_TIMEOUT,
+        goal: tuple[float, float] | None = None,
+        navigator: NavigatorNode | None = None,
     ) -> None:
         self.bus = bus
         self.terrain = terrain
@@ -56,7 +64,14 @@ class TerrainTask:
         self.stop_at_goal = stop_at_goal
         self.frozen_timeout = frozen_timeout
         self.start = np.asarray(terrain.start, dtype=np.float64)
-        self.goal = np.asarray(terrain.goal, dtype=np.float64)
+        self.goal = np.asarray(goal if goal is not None else terrain.goal, dtype=np.float64)
+        if np.linalg.norm(self.goal - self.start) < GOAL_TOLERANCE:
+            raise ConfigError(
+                f"the goal {self.goal.tolist()} lies at the start {self.start.tolist()}"
+            )
+        self.navigator = navigator
+        if navigator is not None:
+            navigator.set_goal((float(self.goal[0]), float(self.goal[1])))
         self.route = (self.goal - self.start) / np.linalg.norm(self.goal - self.start)
         self.status: GaitStatus | None = None
         self.state: RobotState | None = None
@@ -75,8 +90,11 @@ class TerrainTask:
         return float((np.asarray(xy) - self.start) @ self.route)
 
     def at_goal(self, xy: npt.ArrayLike) -> bool:
-        """Whether a point is at the goal or past it."""
-        return self.progress(xy) >= self.progress(self.goal) - GOAL_TOLERANCE
+        """Whether a point is within ``GOAL_TOLERANCE`` of the goal (or past it, on a line)."""
+        p = np.asarray(xy, dtype=np.float64)
+        if self.navigator is not None:
+            return float(np.linalg.norm(p - self.goal)) <= GOAL_TOLERANCE
+        return self.progress(p) >= self.progress(self.goal) - GOAL_TOLERANCE
 
     def begin(self) -> None:
         """Switch the robot to walking."""
@@ -87,6 +105,10 @@ class TerrainTask:
         assert self.status is not None, "the movement node publishes a status when it starts"
         pose = self.status.body_pose
         here = np.array([pose.x, pose.y])
+        if self.navigator is not None:
+            message = self.navigator.command(t, self.status, self.base)
+            self.bus.publish(WalkCommand.TOPIC, message)
+            return message
         if self.at_goal(here):
             message = WalkCommand(speed=0.0, body_height=self.base.body_height, stamp=t)
         else:
@@ -119,7 +141,10 @@ class TerrainTask:
             return True
         if self.stop_at_goal and self.at_goal(body[:2]):
             return True
-        if status.state is GaitState.FROZEN and self.frozen_timeout is not None:
+        stuck = status.state is GaitState.FROZEN or (
+            self.navigator is not None and self.navigator.no_route is not None
+        )
+        if stuck and self.frozen_timeout is not None:
             if self._frozen_since is None:
                 self._frozen_since = t
             return t - self._frozen_since > self.frozen_timeout

@@ -10,19 +10,50 @@ terrain starts at ``start`` facing +x and has its goal at ``goal``.
   floor (boxes; seeded).
 - ``course``: the scoring course of thesis Fig. 6.5 beside a clear lane: boxes, a ramp,
   a sloped pillar, a sloped hole and a round pedestal (a height field).
+- The harder suite, as locomotion benchmarks generate (legged_gym, Isaac Lab), each seeded
+  and with one difficulty parameter: ``stepping_stones``, ``gaps``, ``ramps`` and ``pits``
+  (:mod:`footfall.sim.terrain_relief`); ``boxes``, ``obstacle_field`` and ``dead_end``
+  (:mod:`footfall.sim.terrain_obstacles`).
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import ConfigError
 
-TERRAIN_NAMES = ("flat", "stairs", "cobblestones", "course")
+TERRAIN_NAMES = (
+    "flat",
+    "stairs",
+    "cobblestones",
+    "course",
+    "stepping_stones",
+    "gaps",
+    "boxes",
+    "ramps",
+    "pits",
+    "obstacle_field",
+    "dead_end",
+)
+
+# The parameter of each terrain that sets its difficulty (what `footfall bench terrain`
+# sweeps and `footfall walk --difficulty` sets).
+TERRAIN_DIFFICULTY = {
+    "stairs": "rise",
+    "cobblestones": "groove",
+    "stepping_stones": "gap",
+    "gaps": "width",
+    "boxes": "box_height",
+    "ramps": "slope_deg",
+    "pits": "depth",
+    "obstacle_field": "density",
+    "dead_end": "length",
+}
 
 
 @dataclass(frozen=True)
@@ -71,7 +102,8 @@ class Terrain(ABC):
         """The terrain as MJCF pieces."""
 
 
-def _box(name: str, centre: tuple[float, float, float], half: tuple[float, float, float]) -> str:
+def box_xml(name: str, centre: tuple[float, float, float], half: tuple[float, float, float]) -> str:
+    """An MJCF box geom of the terrain class, from its centre and half sizes [m]."""
     c = " ".join(f"{v:.6g}" for v in centre)
     h = " ".join(f"{v:.6g}" for v in half)
     return f'<geom name="{name}" class="terrain" type="box" pos="{c}" size="{h}"/>'
@@ -146,7 +178,7 @@ class Stairs(Terrain):
     def mjcf(self) -> TerrainXml:
         """One box per step level, stacked."""
         boxes = [
-            _box(
+            box_xml(
                 f"step{k}",
                 (0.5 * (a + b), 0.0, (k + 0.5) * self.rise),
                 (0.5 * (b - a), 0.5 * self.width, 0.5 * self.rise),
@@ -226,7 +258,7 @@ class Cobblestones(Terrain):
                 cx = self.start_x + (i + 0.5) * self.stone
                 cy = self._y0() + (j + 0.5) * self.stone
                 top = float(self._tops[i, j])
-                boxes.append(_box(f"stone{i}_{j}", (cx, cy, 0.5 * top), (half, half, 0.5 * top)))
+                boxes.append(box_xml(f"stone{i}_{j}", (cx, cy, 0.5 * top), (half, half, 0.5 * top)))
         return TerrainXml(worldbody="\n    ".join(boxes))
 
 
@@ -284,55 +316,80 @@ class Course(Terrain):
 
     def mjcf(self) -> TerrainXml:
         """A height field sampled from :meth:`height` every ``sample`` metres."""
-        (x0, x1), (y0, y1) = self.x_range, self.y_range
-        ncol = round((x1 - x0) / self.sample) + 1
-        nrow = round((y1 - y0) / self.sample) + 1
-        xs = np.linspace(x0, x1, ncol)
-        ys = np.linspace(y0, y1, nrow)
-        heights = self.height(xs[None, :], ys[:, None])
-        low, high = float(heights.min()), float(heights.max())
-        span = high - low
-        elevation = (heights - low) / span
-        cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
-        assets = (
-            f'<hfield name="course" nrow="{nrow}" ncol="{ncol}" '
-            f'size="{0.5 * (x1 - x0):.6g} {0.5 * (y1 - y0):.6g} {span:.6g} 0.05"/>'
-        )
-        body = (
-            '<geom name="course" class="terrain" type="hfield" hfield="course" '
-            f'pos="{cx:.6g} {cy:.6g} {low:.6g}"/>'
-        )
-        return TerrainXml(
-            assets=assets,
-            worldbody=body,
-            height_fields=(HeightField("course", elevation),),
-            floor=False,
-        )
+        return height_field_xml("course", self.height, self.x_range, self.y_range, self.sample)
+
+
+def height_field_xml(
+    name: str,
+    height: Callable[[npt.ArrayLike, npt.ArrayLike], npt.NDArray[np.float64]],
+    x_range: tuple[float, float],
+    y_range: tuple[float, float],
+    sample: float,
+) -> TerrainXml:
+    """A terrain as one MuJoCo height field sampled from ``height`` every ``sample`` m.
+
+    The field replaces the floor (``floor`` is False): it is the ground over its extent.
+    """
+    (x0, x1), (y0, y1) = x_range, y_range
+    ncol = round((x1 - x0) / sample) + 1
+    nrow = round((y1 - y0) / sample) + 1
+    xs = np.linspace(x0, x1, ncol)
+    ys = np.linspace(y0, y1, nrow)
+    heights = height(xs[None, :], ys[:, None])
+    low, high = float(heights.min()), float(heights.max())
+    span = max(high - low, 1e-6)
+    elevation = (heights - low) / span
+    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    assets = (
+        f'<hfield name="{name}" nrow="{nrow}" ncol="{ncol}" '
+        f'size="{0.5 * (x1 - x0):.6g} {0.5 * (y1 - y0):.6g} {span:.6g} 0.05"/>'
+    )
+    body = (
+        f'<geom name="{name}" class="terrain" type="hfield" hfield="{name}" '
+        f'pos="{cx:.6g} {cy:.6g} {low:.6g}"/>'
+    )
+    return TerrainXml(
+        assets=assets,
+        worldbody=body,
+        height_fields=(HeightField(name, elevation),),
+        floor=False,
+    )
 
 
 def make_terrain(name: str, seed: int = 0, **params: float) -> Terrain:
     """A terrain by name (see ``TERRAIN_NAMES``), with optional parameters.
 
-    The seed lays the cobblestones, and shifts the staircase's first step by up to 10 cm
-    (unless ``start_x`` is given), so that footholds fall differently on every seed.
+    The seed lays the random terrains out, and shifts the staircase's first step by up to
+    10 cm (unless ``start_x`` is given), so that footholds fall differently on every seed.
 
     Raises:
         ConfigError: On an unknown name or parameter.
     """
+    from footfall.sim import terrain_obstacles as obstacles
+    from footfall.sim import terrain_relief as relief
+
     kinds: dict[str, type[Terrain]] = {
         "flat": Flat,
         "stairs": Stairs,
         "cobblestones": Cobblestones,
         "course": Course,
+        "stepping_stones": relief.SteppingStones,
+        "gaps": relief.Gaps,
+        "boxes": obstacles.Boxes,
+        "ramps": relief.Ramps,
+        "pits": relief.Pits,
+        "obstacle_field": obstacles.ObstacleField,
+        "dead_end": obstacles.DeadEnd,
     }
     if name not in kinds:
         raise ConfigError(f"unknown terrain {name!r}; choose one of {', '.join(TERRAIN_NAMES)}")
+    kind = kinds[name]
     try:
-        if name == "cobblestones":
-            return Cobblestones(seed=seed, **params)
         if name == "stairs" and "start_x" not in params:
             shift = float(np.random.default_rng(seed).uniform(-0.1, 0.1))
             params = {**params, "start_x": Stairs.start_x + shift}
-        return kinds[name](**params)
+        if "seed" in {f.name for f in fields(kind)}:
+            return kind(seed=seed, **params)  # type: ignore[call-arg]
+        return kind(**params)
     except TypeError as exc:
         raise ConfigError(f"terrain {name!r}: {exc}") from exc

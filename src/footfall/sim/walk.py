@@ -1,9 +1,14 @@
-"""A simulated walk: the nodes of the robot, its camera and its task on the MuJoCo backend."""
+"""A simulated walk: the nodes of the robot, its camera and its task on the MuJoCo backend.
+
+It is one module: the settings of a walk, the robot's nodes built from them, the run and
+its metrics change together whenever a node or a metric is added.
+"""
 
 from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
 import time
 from collections import deque
 from collections.abc import Callable
@@ -21,7 +26,9 @@ from footfall.motion.feedback import FeedbackConfig
 from footfall.motion.gait import GaitConfig
 from footfall.motion.walker import WalkController
 from footfall.nodes.mapping import MappingNode
+from footfall.nodes.navigation import NavigatorNode
 from footfall.nodes.pose_guard import PoseGuardNode
+from footfall.planning.navigation import NavigationConfig
 from footfall.planning.terrain_planner import TerrainPlanner, TerrainPlannerConfig
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
@@ -67,6 +74,11 @@ class WalkSettings:
             of simulating as fast as the machine can.
         faults: Sensor and timing faults injected between the nodes (see
             :mod:`footfall.runtime.faults`); none by default.
+        straight: Walk the straight line from the start to the goal (the thesis'
+            behaviour) instead of the routes the navigator plans round what cannot be
+            crossed (planned walking only; a blind walk always goes straight).
+        goal: Goal ``(x, y)`` in the world [m]; the terrain's by default.
+        navigation: Route planning settings.
     """
 
     terrain: str = "flat"
@@ -87,6 +99,9 @@ class WalkSettings:
     stop_at_goal: bool = False
     realtime: bool = False
     faults: FaultSpec = field(default_factory=FaultSpec)
+    straight: bool = False
+    goal: tuple[float, float] | None = None
+    navigation: NavigationConfig = field(default_factory=NavigationConfig)
 
     def __post_init__(self) -> None:
         if self.terrain not in TERRAINS:
@@ -97,10 +112,19 @@ class WalkSettings:
             raise ConfigError(f"walk seconds must be positive, got {self.seconds}")
         if not self.control_rate_hz > 0:
             raise ConfigError(f"control rate must be positive, got {self.control_rate_hz}")
+        if self.goal is not None and not (
+            len(self.goal) == 2 and all(math.isfinite(v) for v in self.goal)
+        ):
+            raise ConfigError(f"a goal is two finite numbers (x, y) [m], got {self.goal!r}")
         if self.blind and self.faults.sensor_faults:
             raise ConfigError(
                 "sensor faults need the camera and pose source: a blind walk has neither"
             )
+
+    @property
+    def navigates(self) -> bool:
+        """Whether the walk follows planned routes (planned walking, not held straight)."""
+        return not (self.blind or self.straight)
 
 
 @dataclass(frozen=True)
@@ -277,7 +301,16 @@ class SimRobot:
         )
         final = log.array("body_position_in_world")[-1, :2]
         goal = task.goal
-        extent = (-1.0, float(goal[0]) + 1.0, -1.5, 1.5)
+        # Judge every foothold: the truth's grid covers wherever the feet went.
+        feet = log.array("feet_in_world")[..., :2].reshape(-1, 2)
+        low = np.minimum(feet.min(axis=0), goal) - 0.5
+        high = np.maximum(feet.max(axis=0), goal) + 0.5
+        extent = (
+            min(-1.0, float(low[0])),
+            max(float(goal[0]) + 1.0, float(high[0])),
+            min(-1.5, float(low[1])),
+            max(1.5, float(high[1])),
+        )
         truth = TrueScores(terrain, settings.map.resolution, settings.score, extent)
         metrics.update(foothold_metrics(log, terrain, truth, spec.foot_radius))
         metrics.update(
@@ -367,7 +400,19 @@ def simulate_walk(
     robot = SimRobot.build(spec, settings, terrain, bus)
     if on_build is not None:
         on_build(robot)
-    task = TerrainTask(bus, terrain, settings.command, settings.stop_at_goal)
+    navigator = (
+        NavigatorNode(bus, spec, config=settings.navigation, background=settings.realtime)
+        if settings.navigates
+        else None
+    )
+    task = TerrainTask(
+        bus,
+        terrain,
+        settings.command,
+        settings.stop_at_goal,
+        goal=settings.goal,
+        navigator=navigator,
+    )
     task.begin()
     scheduler = (
         WallClockScheduler(settings.control_rate_hz)
@@ -390,4 +435,18 @@ def simulate_walk(
     scheduler.run(tick, settings.seconds)
     wall_seconds = time.perf_counter() - wall_start
     robot.close()
-    return robot.result(task, wall_seconds, scheduler)
+    result = robot.result(task, wall_seconds, scheduler)
+    if navigator is not None:
+        navigator.close()
+        result.metrics.update(navigation_metrics(navigator))
+    result.metrics["navigated"] = navigator is not None
+    return result
+
+
+def navigation_metrics(navigator: NavigatorNode) -> dict[str, object]:
+    """What the navigator did: whether it found no route and why, replans and their times."""
+    return {
+        "no_route": navigator.no_route is not None,
+        "no_route_reason": navigator.no_route.reason if navigator.no_route is not None else "",
+        **navigator.timing(),
+    }

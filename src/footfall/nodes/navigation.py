@@ -1,0 +1,280 @@
+"""The navigation node: map updates and the robot's status in, walk commands to a goal out.
+
+It keeps the newest :class:`~footfall.messages.MapUpdate`, builds the cost grid from it
+(:mod:`footfall.planning.traversability`) and a route to the goal
+(:mod:`footfall.planning.navigation`), and turns the route into walk commands for the
+movement node. A route is replanned once it is ``replan_period_s`` old and a newer map has
+come, and at once when the walker has frozen for want of footholds (the ground ahead is
+then kept out for a while: the route was blocked there). When no route reaches the goal
+(confirmed over a few replans) it says why and commands standing still; it keeps
+replanning, and walks again once a route opens.
+
+With ``background`` the replans run on a worker thread (the search holds no GIL): a command
+tick only hands a map over and picks up a finished route, so it never waits for a plan.
+Without, each replan runs in the tick that asks for it, which keeps a simulated walk exactly
+repeatable.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.messages import GaitState, GaitStatus, LogLine, MapUpdate, WalkCommand
+from footfall.planning.navigation import (
+    NavigationConfig,
+    NoRoute,
+    Route,
+    follow_route,
+    plan_route,
+)
+from footfall.planning.traversability import CostGrid, cost_grid, span_radius
+from footfall.robot.planar import PlanarPose
+from footfall.robot.spec import HexapodSpec
+from footfall.runtime.bus import Bus
+
+# Replan times kept for the timing figures.
+TIMING_HISTORY = 10_000
+
+
+@dataclass(frozen=True)
+class PlanOutcome:
+    """One replan: its result and how long its parts took.
+
+    Attributes:
+        result: The route, or why there is none.
+        grid: The cost grid it searched.
+        map_sequence: Sequence number of the map update it used.
+        grid_seconds: Time to build the cost grid [s].
+        search_seconds: Time of the route search [s].
+    """
+
+    result: Route | NoRoute
+    grid: CostGrid
+    map_sequence: int
+    grid_seconds: float
+    search_seconds: float
+
+
+class WallMemory:
+    """Wall tops found on earlier map updates, in world cells, until seen flat.
+
+    Cells are indexed on the world grid of the map's resolution (``floor(x / res)``), so a
+    rolling window finds its own cells again.
+    """
+
+    def __init__(self) -> None:
+        self._tops: dict[tuple[int, int], float] = {}
+
+    def __len__(self) -> int:
+        return len(self._tops)
+
+    @staticmethod
+    def _offset(origin: tuple[float, float], resolution: float) -> tuple[int, int]:
+        return (round(origin[0] / resolution), round(origin[1] / resolution))
+
+    def window(self, update: MapUpdate) -> npt.NDArray[np.float64]:
+        """The remembered tops on the update's cells, NaN where none [m]."""
+        n, m = np.shape(update.heights)
+        out = np.full((n, m), np.nan)
+        i0, j0 = self._offset(update.origin, update.resolution)
+        for (gi, gj), top in self._tops.items():
+            i, j = gi - i0, gj - j0
+            if 0 <= i < n and 0 <= j < m:
+                out[i, j] = top
+        return out
+
+    def update(self, grid: CostGrid) -> None:
+        """Remember the grid's walls and forget those its cells now show flat."""
+        i0, j0 = self._offset(grid.origin, grid.resolution)
+        for i, j in zip(*np.nonzero(grid.flat), strict=True):
+            self._tops.pop((int(i) + i0, int(j) + j0), None)
+        for i, j in zip(*np.nonzero(grid.wall), strict=True):
+            self._tops[(int(i) + i0, int(j) + j0)] = float(grid.wall_top[i, j])
+
+
+class NavigatorNode:
+    """Walk to a goal in the world along replanned routes.
+
+    Args:
+        bus: The bus (map updates in, log lines out).
+        spec: The robot (its legs' span).
+        goal_in_world: Goal ``(x, y)`` [m]; None until :meth:`set_goal`.
+        config: Settings.
+        background: Replan on a worker thread (see the module docstring).
+    """
+
+    name = "navigation"
+
+    def __init__(
+        self,
+        bus: Bus,
+        spec: HexapodSpec,
+        goal_in_world: tuple[float, float] | None = None,
+        config: NavigationConfig | None = None,
+        background: bool = False,
+    ) -> None:
+        self.bus = bus
+        self.config = config or NavigationConfig()
+        self.span_radius_m = span_radius(spec)
+        self.goal: tuple[float, float] | None = None
+        self.route: Route | None = None
+        self.no_route: NoRoute | None = None
+        self.grid: CostGrid | None = None
+        self.replans = 0
+        self.blocked_count = 0
+        self.plan_seconds: deque[float] = deque(maxlen=TIMING_HISTORY)
+        self._map: MapUpdate | None = None
+        self._planned_sequence = -1
+        self._planned_at = -math.inf
+        self._force = False
+        self._misses = 0
+        self._blocked: list[tuple[float, float, float, float]] = []
+        self._frozen_since: float | None = None
+        self._blocked_this_freeze = False
+        self._last_command: WalkCommand | None = None
+        self._walls = WallMemory()
+        self._pool = ThreadPoolExecutor(max_workers=1) if background else None
+        self._pending: Future[PlanOutcome] | None = None
+        bus.subscribe(MapUpdate.TOPIC, self._on_map, last=True)
+        if goal_in_world is not None:
+            self.set_goal(goal_in_world)
+
+    def _on_map(self, message: MapUpdate) -> None:
+        self._map = message
+
+    def set_goal(self, goal_in_world: tuple[float, float] | None) -> None:
+        """Walk to a new goal (None: stop navigating); the route is planned afresh."""
+        self.goal = (
+            None if goal_in_world is None else (float(goal_in_world[0]), float(goal_in_world[1]))
+        )
+        self.route = None
+        self.no_route = None
+        self._misses = 0
+        self._force = True
+
+    def at_goal(self, pose: PlanarPose) -> bool:
+        """Whether the body is within the goal tolerance."""
+        if self.goal is None:
+            return False
+        return (
+            math.hypot(pose.x - self.goal[0], pose.y - self.goal[1]) <= self.config.goal_tolerance_m
+        )
+
+    def _plan(
+        self, update: MapUpdate, pose: PlanarPose, goal: tuple[float, float], t: float
+    ) -> PlanOutcome:
+        t0 = time.perf_counter()
+        grid = cost_grid(update, self.config.traversability, self.span_radius_m)
+        t1 = time.perf_counter()
+        blocked = tuple((x, y, r) for x, y, r, until in self._blocked if until > t)
+        result = plan_route(grid, (pose.x, pose.y), goal, self.config, blocked, self.route)
+        t2 = time.perf_counter()
+        return PlanOutcome(result, grid, update.sequence, t1 - t0, t2 - t1)
+
+    def _take(self, outcome: PlanOutcome, t: float) -> None:
+        self.replans += 1
+        self.grid = outcome.grid
+        self.plan_seconds.append(outcome.grid_seconds + outcome.search_seconds)
+        if isinstance(outcome.result, Route):
+            if self.no_route is not None:
+                self._log(t, "info", "a route to the goal is open again")
+            self.route, self.no_route, self._misses = outcome.result, None, 0
+            return
+        self._misses += 1
+        if self._misses >= self.config.confirm_no_route and self.no_route is None:
+            self.no_route = outcome.result
+            self.route = None
+            self._log(t, "warning", f"standing still: {outcome.result.reason}")
+
+    def _log(self, t: float, level: str, text: str) -> None:
+        self.bus.publish(LogLine.TOPIC, LogLine(t, self.name, level, text))
+
+    def _watch_freeze(self, t: float, status: GaitStatus) -> None:
+        """Keep the ground ahead of a walker frozen for want of footholds out of routes."""
+        if status.state is not GaitState.FROZEN:
+            self._frozen_since, self._blocked_this_freeze = None, False
+            return
+        if self._frozen_since is None:
+            self._frozen_since = t
+        if self._blocked_this_freeze or t - self._frozen_since < self.config.blocked_after_s:
+            return
+        pose = status.body_pose
+        heading = pose.yaw
+        command = self._last_command
+        if command is not None and command.speed > 0:
+            heading += math.atan2(command.direction[1], command.direction[0])
+        ahead = self.config.blocked_ahead_m
+        x, y = pose.x + ahead * math.cos(heading), pose.y + ahead * math.sin(heading)
+        self._blocked.append((x, y, self.config.blocked_radius_m, t + self.config.blocked_for_s))
+        self._blocked = [b for b in self._blocked if b[3] > t]
+        self._blocked_this_freeze = True
+        self.blocked_count += 1
+        self._force = True
+        self._log(
+            t, "info", f"route blocked at ({x:.2f}, {y:.2f}) m ({status.frozen_reason}); replanning"
+        )
+
+    def _replan(self, t: float, pose: PlanarPose) -> None:
+        if self._pending is not None and self._pending.done():
+            outcome = self._pending.result()
+            self._pending = None
+            self._take(outcome, t)
+        update, goal = self._map, self.goal
+        if update is None or goal is None or self._pending is not None:
+            return
+        due = self._force or t - self._planned_at >= self.config.replan_period_s
+        if not due or (update.sequence == self._planned_sequence and not self._force):
+            return
+        self._force = False
+        self._planned_at, self._planned_sequence = t, update.sequence
+        if self._pool is None:
+            self._take(self._plan(update, pose, goal, t), t)
+        else:
+            self._pending = self._pool.submit(self._plan, update, pose, goal, t)
+
+    def command(self, t: float, status: GaitStatus, base: WalkCommand) -> WalkCommand:
+        """The walk command at time ``t`` [s] for the robot's status, at ``base``'s speed."""
+        pose = status.body_pose
+        self._watch_freeze(t, status)
+        stop = WalkCommand(speed=0.0, body_height=base.body_height, stamp=t)
+        if self.goal is None or self.at_goal(pose):
+            command = stop
+        else:
+            self._replan(t, pose)
+            if self.route is None:
+                command = stop
+            else:
+                command = follow_route(self.route, pose, base, self.config, t)
+        self._last_command = command
+        return command
+
+    def timing(self) -> dict[str, float]:
+        """Replan count and times (cost grid plus search): median and 95th percentile [ms]."""
+        times = sorted(self.plan_seconds)
+        if not times:
+            return {"replans": 0}
+        p95 = times[min(len(times) - 1, math.ceil(0.95 * len(times)) - 1)]
+        return {
+            "replans": self.replans,
+            "replan_ms_median": 1e3 * statistics.median(times),
+            "replan_ms_p95": 1e3 * p95,
+            "routes_blocked": self.blocked_count,
+        }
+
+    def route_blocked_discs(self, t: float) -> list[tuple[float, float, float]]:
+        """Discs ``(x, y, radius)`` kept out of routes at time ``t`` [m]."""
+        return [(x, y, r) for x, y, r, until in self._blocked if until > t]
+
+    def close(self) -> None:
+        """Stop the worker thread."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None

@@ -1,0 +1,301 @@
+"""Route planning for the hexapod: the cost grid, the search, following, the navigator node."""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.sparse import lil_matrix
+from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
+
+from footfall.messages import GaitState, GaitStatus, MapUpdate, Mode, WalkCommand
+from footfall.nodes.navigation import NavigatorNode
+from footfall.planning.navigation import NavigationConfig, NoRoute, Route, follow_route, plan_route
+from footfall.planning.route_kernels import dijkstra
+from footfall.planning.traversability import TraversabilityConfig, cost_grid, span_radius
+from footfall.robot.planar import PlanarPose
+from footfall.robot.spec import load_spec
+from footfall.runtime.bus import InProcessBus
+from footfall.scoring.walkability import score_heights
+
+RES = 0.02
+SPEC = load_spec("default")
+SPAN = span_radius(SPEC)
+
+
+def _update(heights: np.ndarray, origin=(-1.0, -1.0), known=None, sequence=1) -> MapUpdate:
+    """A map update scored by the real scorer; ``known`` False cells are unseen."""
+    h = np.array(heights, dtype=np.float64)
+    if known is not None:
+        h[~known] = np.nan
+    slope, proximity, score, valid = score_heights(h, RES)
+    return MapUpdate(
+        stamp=0.0,
+        sequence=sequence,
+        heights=h,
+        known=np.isfinite(h),
+        spread=None,
+        slope=slope,
+        proximity=proximity,
+        score=score,
+        valid=valid,
+        origin=origin,
+        resolution=RES,
+    )
+
+
+def _grid_xy(n=150, origin=(-1.0, -1.0)):
+    xs = origin[0] + (np.arange(n) + 0.5) * RES
+    ys = origin[1] + (np.arange(n) + 0.5) * RES
+    return np.meshgrid(xs, ys, indexing="ij")
+
+
+def _with_box(heights, x, y, cx, cy, half, top):
+    inside = (np.abs(x - cx) <= half) & (np.abs(y - cy) <= half)
+    return np.where(inside, top, heights)
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(2, 9), st.integers(2, 9), st.floats(0.0, 0.4))
+@settings(max_examples=60, deadline=None)
+def test_the_search_finds_the_least_route_cost_to_every_cell(seed, rows, cols, lethal_share):
+    """Dijkstra over the 8-connected grid against SciPy's on the same graph (move cost:
+    length times the mean of the two cells' costs; lethal cells cannot be entered)."""
+    rng = np.random.default_rng(seed)
+    cost = rng.uniform(1.0, 5.0, (rows, cols))
+    cost[rng.random((rows, cols)) < lethal_share] = np.inf
+    cost[0, 0] = rng.uniform(1.0, 5.0)
+    distance = np.empty((rows, cols))
+    parent = np.empty((rows, cols), dtype=np.int64)
+    dijkstra(cost, 0, 0, RES, distance, parent)
+    graph = lil_matrix((rows * cols, rows * cols))
+    for i in range(rows):
+        for j in range(cols):
+            for di in (-1, 0, 1):
+                for dj in (-1, 0, 1):
+                    ni, nj = i + di, j + dj
+                    if (di or dj) and 0 <= ni < rows and 0 <= nj < cols:
+                        if np.isfinite(cost[i, j]) and np.isfinite(cost[ni, nj]):
+                            length = math.hypot(di, dj) * RES
+                            graph[i * cols + j, ni * cols + nj] = (
+                                length * 0.5 * (cost[i, j] + cost[ni, nj])
+                            )
+    expected = scipy_dijkstra(graph.tocsr(), indices=0).reshape(rows, cols)
+    np.testing.assert_allclose(distance, expected, rtol=1e-9)
+    # Following the parents from any reached cell ends at the start.
+    for i, j in zip(*np.nonzero(np.isfinite(distance)), strict=True):
+        flat, hops = i * cols + j, 0
+        while parent.flat[flat] >= 0:
+            flat, hops = int(parent.flat[flat]), hops + 1
+            assert hops <= rows * cols
+        assert flat == 0
+
+
+def test_a_tall_box_is_lethal_within_the_legs_span_and_a_low_step_is_not():
+    """A 30 cm block rules out every body position whose legs would reach it; a 5 cm step
+    costs nothing extra: the legs climb it."""
+    x, y = _grid_xy()
+    flat = np.zeros_like(x)
+    grid = cost_grid(
+        _update(_with_box(flat, x, y, 0.5, 0.5, 0.15, 0.3)), TraversabilityConfig(), SPAN
+    )
+    d = np.hypot(np.maximum(np.abs(x - 0.5) - 0.15, 0), np.maximum(np.abs(y - 0.5) - 0.15, 0))
+    assert grid.lethal[d < SPAN - 2 * RES].all()
+    assert not grid.lethal[d > SPAN + 3 * RES].any()
+    step = cost_grid(_update(np.where(x > 0.4, 0.05, 0.0)), TraversabilityConfig(), SPAN)
+    assert not step.lethal.any()
+
+
+def test_a_deep_narrow_trench_is_straddled_and_a_wide_pit_is_not():
+    """The rim of a 10 cm trench 30 cm deep is at the robot's own level: a body centred
+    over it is not in a wall (its feet find the platforms); a pit wider than the legs'
+    span is neither walked into nor over, but round."""
+    x, y = _grid_xy()
+    trench = np.where(np.abs(x - 0.5) <= 0.05, -0.3, 0.0)
+    grid = cost_grid(_update(trench), TraversabilityConfig(), SPAN)
+    assert np.isfinite(grid.cost[np.abs(x - 0.5) < 0.03]).all()
+    pit = np.where(np.hypot(x - 0.5, y - 0.5) <= 0.6, -0.3, 0.0)
+    wide = cost_grid(_update(pit), TraversabilityConfig(), SPAN)
+    into = plan_route(wide, (-0.8, 0.5), (0.5, 0.5), NavigationConfig())
+    assert isinstance(into, NoRoute)
+    past = plan_route(wide, (-0.8, 0.5), (1.8, 0.5), NavigationConfig())
+    assert isinstance(past, Route)
+    p = past.points_in_world
+    samples = np.concatenate(
+        [a + np.linspace(0, 1, 40)[:, None] * (b - a) for a, b in itertools.pairwise(p)]
+    )
+    assert np.hypot(samples[:, 0] - 0.5, samples[:, 1] - 0.5).min() > 0.6
+
+
+def test_unknown_ground_is_passable_but_dearer_than_seen_ground():
+    """Unseen cells cost more per metre than seen flat ones, and are never lethal."""
+    x, _ = _grid_xy()
+    grid = cost_grid(_update(np.zeros_like(x), known=x < 0.5), TraversabilityConfig(), SPAN)
+    assert not grid.lethal.any()
+    assert grid.cost[x > 1.2].min() > grid.cost[x < 0.0].max()
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(1, 6))
+@settings(max_examples=25, deadline=None)
+def test_a_route_never_enters_a_lethal_cell(seed, boxes):
+    """Among random tall blocks, every point along the route (sampled finely) lies on a
+    cell the body may occupy, and the route ends at the goal when there is one."""
+    rng = np.random.default_rng(seed)
+    x, y = _grid_xy()
+    h = np.zeros_like(x)
+    for _ in range(boxes):
+        h = _with_box(
+            h, x, y, rng.uniform(0.3, 1.6), rng.uniform(-0.6, 1.6), rng.uniform(0.05, 0.2), 0.3
+        )
+    grid = cost_grid(_update(h), TraversabilityConfig(), SPAN)
+    start, goal = (-0.7, 0.5), (1.7, 0.5)
+    route = plan_route(grid, start, goal, NavigationConfig())
+    start_cell = grid.cell_of(start)
+    if isinstance(route, NoRoute):
+        assert "goal" in route.reason
+        return
+    assert np.linalg.norm(route.points_in_world[-1] - goal) <= 0.1
+    p = route.points_in_world
+    for a, b in itertools.pairwise(p):
+        for u in np.linspace(0, 1, 50):
+            cell = grid.cell_of(a + u * (b - a))
+            if np.hypot(*(a + u * (b - a) - start)) > 0.3 or np.isfinite(grid.cost[start_cell]):
+                assert np.isfinite(grid.cost[cell]), f"route through lethal cell {cell}"
+
+
+def test_a_wall_is_gone_round_and_an_enclosed_goal_has_no_route():
+    """A wall across the straight line with a way round: the route leaves the line; the
+    same goal walled in on every side: no route, and the reason says so."""
+    x, y = _grid_xy()
+    wall = np.where((np.abs(x - 0.5) <= 0.05) & (y < 1.1), 0.3, 0.0)
+    grid = cost_grid(_update(wall), TraversabilityConfig(), SPAN)
+    route = plan_route(grid, (-0.5, 0.0), (1.5, 0.0), NavigationConfig())
+    assert isinstance(route, Route)
+    assert route.points_in_world[:, 1].max() > 1.1 + SPAN - 0.05
+    pen = np.where(
+        (np.maximum(np.abs(x - 1.2), np.abs(y - 0.5)) <= 0.75)
+        & (np.maximum(np.abs(x - 1.2), np.abs(y - 0.5)) >= 0.65),
+        0.3,
+        0.0,
+    )
+    closed = cost_grid(_update(pen), TraversabilityConfig(), SPAN)
+    result = plan_route(closed, (-0.7, 0.5), (1.2, 0.5), NavigationConfig())
+    assert isinstance(result, NoRoute)
+    assert "no route" in result.reason or "cannot stand" in result.reason
+
+
+def test_a_goal_beyond_the_map_is_headed_for_over_its_edge():
+    """An off-map goal: the route leaves the window towards it and ends at the goal."""
+    x, _ = _grid_xy()
+    grid = cost_grid(_update(np.zeros_like(x)), TraversabilityConfig(), SPAN)
+    route = plan_route(grid, (0.0, 0.5), (6.0, 0.5), NavigationConfig())
+    assert isinstance(route, Route) and not route.goal_on_map
+    np.testing.assert_allclose(route.points_in_world[-1], (6.0, 0.5))
+    assert route.points_in_world[-2, 0] > 1.9  # the window's far edge
+
+
+@given(st.floats(-math.pi, math.pi), st.floats(0.05, 2.0), st.floats(-math.pi, math.pi))
+@settings(max_examples=100, deadline=None)
+def test_following_turns_towards_the_route_and_walks_only_when_facing_it(yaw, distance, bearing):
+    """The yaw rate has the sign of the heading error; past the turn-in-place angle the
+    robot only turns; within it the command walks towards the aim point."""
+    config = NavigationConfig()
+    pose = PlanarPose(0.0, 0.0, yaw)
+    end = (distance * math.cos(bearing), distance * math.sin(bearing))
+    route = Route(np.array([[0.0, 0.0], end]), 1.0, True)
+    command = follow_route(route, pose, WalkCommand(speed=0.1), config, 0.0)
+    error = math.atan2(math.sin(bearing - yaw), math.cos(bearing - yaw))
+    if abs(error) > 1e-3:
+        assert math.copysign(1, command.yaw_rate) == math.copysign(1, error)
+    if abs(error) > config.turn_in_place_rad:
+        assert command.speed == 0.0
+    else:
+        vx, vy = command.velocity_in_body
+        heading_in_world = yaw + math.atan2(vy, vx)
+        assert abs(math.remainder(heading_in_world - bearing, 2 * math.pi)) < 1e-6
+        assert command.speed > 0.0
+
+
+def _status(t: float, pose: PlanarPose, state=GaitState.STEPPING) -> GaitStatus:
+    return GaitStatus(t, Mode.WALKING, state, "", "", pose, 0.09, 0, 0, 0.0)
+
+
+def test_the_navigator_stands_still_without_a_route_and_goes_when_one_opens():
+    """Walled in: after a few replans the command is to stand still, with the reason
+    logged; the wall gone, the robot walks again."""
+    x, y = _grid_xy()
+    pen = np.where(np.maximum(np.abs(x - 0.5), np.abs(y - 0.5)) >= 0.9, 0.3, 0.0)
+    bus = InProcessBus()
+    logs = []
+    bus.subscribe("log", logs.append)
+    config = NavigationConfig(replan_period_s=0.1)
+    navigator = NavigatorNode(bus, SPEC, (3.0, 0.5), config)
+    pose, base = PlanarPose(0.5, 0.5, 0.0), WalkCommand(speed=0.1)
+    t, sequence = 0.0, 1
+    for _ in range(config.confirm_no_route + 1):
+        bus.publish(MapUpdate.TOPIC, _update(pen, sequence=sequence))
+        command = navigator.command(t, _status(t, pose), base)
+        t, sequence = t + 0.2, sequence + 1
+    assert navigator.no_route is not None
+    assert command.speed == 0.0 and command.yaw_rate == 0.0
+    assert any("standing still" in line.text for line in logs)
+    bus.publish(MapUpdate.TOPIC, _update(np.zeros_like(x), sequence=sequence))
+    command = navigator.command(t, _status(t, pose), base)
+    assert navigator.no_route is None and navigator.route is not None
+    assert command.speed > 0.0
+    navigator.close()
+
+
+def test_a_background_replan_leaves_the_command_tick_free():
+    """On a worker thread a replan never holds up a command: each returns at once (the
+    first ones standing still until the route comes), and the route arrives."""
+    x, _ = _grid_xy(256, origin=(-2.56, -2.56))
+    bus = InProcessBus()
+    navigator = NavigatorNode(bus, SPEC, (2.0, 0.0), NavigationConfig(), background=True)
+    bus.publish(MapUpdate.TOPIC, _update(np.zeros_like(x), origin=(-2.56, -2.56)))
+    pose, base = PlanarPose(0.0, 0.0, 0.0), WalkCommand(speed=0.1)
+    navigator.command(0.0, _status(0.0, pose), base)  # warm up the compiled search
+    longest, deadline = 0.0, time.monotonic() + 30.0
+    t = 0.0
+    while navigator.route is None and time.monotonic() < deadline:
+        t += 0.01
+        start = time.perf_counter()
+        navigator.command(t, _status(t, pose), base)
+        longest = max(longest, time.perf_counter() - start)
+        time.sleep(0.001)
+    navigator.close()
+    assert navigator.route is not None
+    assert navigator.replans >= 1
+    assert longest < min(navigator.plan_seconds), "a command waited for a replan"
+
+
+def test_navigation_settings_are_checked():
+    """Bad settings name what is wrong."""
+    with pytest.raises(Exception, match="switch_margin"):
+        NavigationConfig(switch_margin=1.5)
+    with pytest.raises(Exception, match="max_unsupported"):
+        TraversabilityConfig(max_unsupported=0.0)
+
+
+def test_a_wall_stays_remembered_until_its_cells_are_seen_flat():
+    """A face that a later frame leaves only its foot as height is still a wall (the
+    navigator remembers it); once the cells are seen flat it is forgotten."""
+    from footfall.nodes.navigation import WallMemory
+
+    x, _ = _grid_xy()
+    wall = np.where(np.abs(x - 0.5) <= 0.03, 0.3, 0.0)
+    memory = WallMemory()
+    memory.update(cost_grid(_update(wall), TraversabilityConfig(), SPAN))
+    assert len(memory) > 0
+    foot = _update(np.zeros_like(x))
+    foot = MapUpdate(**{**foot.__dict__, "spread": np.where(np.abs(x - 0.5) <= 0.03, 0.25, 0.0)})
+    held = cost_grid(foot, TraversabilityConfig(), SPAN, memory.window(foot))
+    assert held.lethal[np.abs(x - 0.5) < 0.1].all()
+    memory.update(held)
+    seen_flat = _update(np.zeros_like(x), sequence=3)
+    memory.update(cost_grid(seen_flat, TraversabilityConfig(), SPAN, memory.window(seen_flat)))
+    assert len(memory) == 0
