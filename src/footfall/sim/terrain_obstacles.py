@@ -83,8 +83,35 @@ def route_exists(
     return a != 0 and a == b
 
 
+def scatter(
+    rng: np.random.Generator, size: tuple[float, float], x_range: tuple[float, float], width: float
+) -> tuple[float, float, float, float]:
+    """A random box footprint inside ``x_range`` x ``[-width/2, width/2]``: centre, half sizes."""
+    sx, sy = rng.uniform(*size, size=2)
+    cx = rng.uniform(x_range[0] + 0.5 * sx, x_range[1] - 0.5 * sx)
+    cy = rng.uniform(-0.5 * width + 0.5 * sy, 0.5 * width - 0.5 * sy)
+    return float(cx), float(cy), 0.5 * float(sx), 0.5 * float(sy)
+
+
+class BoxTerrain(Terrain):
+    """A terrain of boxes standing on the floor: the truth and the MJCF of its ``layout``."""
+
+    @property
+    def layout(self) -> tuple[Box, ...]:
+        """The boxes."""
+        raise NotImplementedError
+
+    def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Highest box top over the point, 0 elsewhere [m]."""
+        return boxes_height(self.layout, x, y)
+
+    def mjcf(self) -> TerrainXml:
+        """One geom per box."""
+        return boxes_xml(self.name, self.layout)
+
+
 @dataclass(frozen=True)
-class Boxes(Terrain):
+class Boxes(BoxTerrain):
     """Random boxes on the floor.
 
     Attributes:
@@ -112,12 +139,11 @@ class Boxes(Terrain):
             raise ConfigError("boxes need a positive height, a count >= 0 and 0 < size min <= max")
         rng = np.random.default_rng(self.seed)
         boxes = []
+        span = (self.start_x, self.start_x + self.length)
         for _ in range(self.count):
-            sx, sy = rng.uniform(*self.size, size=2)
-            cx = rng.uniform(self.start_x + 0.5 * sx, self.start_x + self.length - 0.5 * sx)
-            cy = rng.uniform(-0.5 * self.width + 0.5 * sy, 0.5 * self.width - 0.5 * sy)
+            footprint = scatter(rng, self.size, span, self.width)
             top = rng.uniform(0.25 * self.box_height, self.box_height)
-            boxes.append((float(cx), float(cy), 0.5 * float(sx), 0.5 * float(sy), float(top)))
+            boxes.append((*footprint, float(top)))
         object.__setattr__(self, "boxes", tuple(boxes))
 
     @property
@@ -125,17 +151,14 @@ class Boxes(Terrain):
         """Half a metre past the field."""
         return (self.start_x + self.length + 0.5, 0.0)
 
-    def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
-        """Highest box top over the point [m]."""
-        return boxes_height(self.boxes, x, y)
-
-    def mjcf(self) -> TerrainXml:
-        """One geom per box."""
-        return boxes_xml("box", self.boxes)
+    @property
+    def layout(self) -> tuple[Box, ...]:
+        """The boxes."""
+        return self.boxes
 
 
 @dataclass(frozen=True)
-class ObstacleField(Terrain):
+class ObstacleField(BoxTerrain):
     """Blocks no leg climbs, with at least one free route between them.
 
     Attributes:
@@ -175,13 +198,9 @@ class ObstacleField(Terrain):
         covered, blocks = 0.0, []
         x0, x1 = self.start_x, self.start_x + self.length
         while covered < target:
-            sx, sy = rng.uniform(*self.size, size=2)
-            cx = rng.uniform(x0 + 0.5 * sx, x1 - 0.5 * sx)
-            cy = rng.uniform(-0.5 * self.width + 0.5 * sy, 0.5 * self.width - 0.5 * sy)
-            blocks.append(
-                (float(cx), float(cy), 0.5 * float(sx), 0.5 * float(sy), self.block_height)
-            )
-            covered += sx * sy
+            cx, cy, hx, hy = scatter(rng, self.size, (x0, x1), self.width)
+            blocks.append((cx, cy, hx, hy, self.block_height))
+            covered += 4 * hx * hy
         bounds = (-0.5, x1 + 1.0, -0.5 * self.width - 1.0, 0.5 * self.width + 1.0)
         while blocks and not route_exists(
             tuple(blocks), self.start, self.goal, self.clearance, bounds
@@ -194,17 +213,14 @@ class ObstacleField(Terrain):
         """Sixty centimetres past the field."""
         return (self.start_x + self.length + 0.6, 0.0)
 
-    def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
-        """Block top over a block, 0 elsewhere [m]."""
-        return boxes_height(self.blocks, x, y)
-
-    def mjcf(self) -> TerrainXml:
-        """One geom per block."""
-        return boxes_xml("block", self.blocks)
+    @property
+    def layout(self) -> tuple[Box, ...]:
+        """The blocks."""
+        return self.blocks
 
 
 @dataclass(frozen=True)
-class DeadEnd(Terrain):
+class DeadEnd(BoxTerrain):
     """A walled corridor closed at its far end and behind the start: no route to the goal.
 
     Attributes:
@@ -248,10 +264,7 @@ class DeadEnd(Terrain):
         """Beyond the far wall."""
         return self._goal
 
-    def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
-        """Wall top over a wall, 0 elsewhere [m]."""
-        return boxes_height(self.walls, x, y)
-
-    def mjcf(self) -> TerrainXml:
-        """One geom per wall."""
-        return boxes_xml("wall", self.walls)
+    @property
+    def layout(self) -> tuple[Box, ...]:
+        """The walls."""
+        return self.walls

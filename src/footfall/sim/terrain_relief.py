@@ -23,7 +23,7 @@ import numpy.typing as npt
 
 from footfall.errors import ConfigError
 from footfall.sim.terrain import Terrain, TerrainXml, height_field_xml
-from footfall.sim.terrain_obstacles import Box, boxes_height
+from footfall.sim.terrain_obstacles import Box, boxes_height, scatter
 
 # Below a sunken terrain's arena lies the simulator's plane, this deep [m].
 VOID_Z = -1.0
@@ -68,8 +68,27 @@ def _sunken_height(
     return np.where(covered, on_top, np.where(inside, -depth, VOID_Z))
 
 
+class SunkenTerrain(Terrain):
+    """Boxes (``tops``) rising from a pit floor at ``-depth``, in an arena round the way."""
+
+    tops: tuple[Box, ...]
+    depth: float
+
+    @property
+    def _x_range(self) -> tuple[float, float]:
+        return (-ARENA_BEHIND, self.goal[0] + ARENA_BEYOND)
+
+    def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """A box top, the pit floor between, the void off the arena [m]."""
+        return _sunken_height(self.tops, self.depth, self._x_range, x, y)
+
+    def mjcf(self) -> TerrainXml:
+        """A pit floor and one box per top."""
+        return _sunken_xml(self.name, self.tops, self.depth, self._x_range)
+
+
 @dataclass(frozen=True)
-class SteppingStones(Terrain):
+class SteppingStones(SunkenTerrain):
     """Stones over a pit, between a start and an end platform.
 
     Attributes:
@@ -126,21 +145,9 @@ class SteppingStones(Terrain):
         """Sixty centimetres past the last stones, on the end platform."""
         return (self._end + 0.6, 0.0)
 
-    @property
-    def _x_range(self) -> tuple[float, float]:
-        return (-ARENA_BEHIND, self.goal[0] + ARENA_BEYOND)
-
-    def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
-        """Stone or platform top, the pit floor between, the void off the arena [m]."""
-        return _sunken_height(self.tops, self.depth, self._x_range, x, y)
-
-    def mjcf(self) -> TerrainXml:
-        """A pit floor, two platforms and one box per stone."""
-        return _sunken_xml("stone", self.tops, self.depth, self._x_range)
-
 
 @dataclass(frozen=True)
-class Gaps(Terrain):
+class Gaps(SunkenTerrain):
     """Platforms with trenches between them, across the whole way.
 
     Attributes:
@@ -185,18 +192,6 @@ class Gaps(Terrain):
         """Sixty centimetres onto the last platform."""
         return (self._goal_x, 0.0)
 
-    @property
-    def _x_range(self) -> tuple[float, float]:
-        return (-ARENA_BEHIND, self.goal[0] + ARENA_BEYOND)
-
-    def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
-        """Platform top, the trench floor between, the void off the arena [m]."""
-        return _sunken_height(self.tops, self.depth, self._x_range, x, y)
-
-    def mjcf(self) -> TerrainXml:
-        """A trench floor and one box per platform."""
-        return _sunken_xml("platform", self.tops, self.depth, self._x_range)
-
 
 @dataclass(frozen=True)
 class Pits(Terrain):
@@ -229,11 +224,9 @@ class Pits(Terrain):
             raise ConfigError("pits need a positive depth, a count >= 0 and 0 < size min <= max")
         rng = np.random.default_rng(self.seed)
         pits = []
+        span = (self.start_x, self.start_x + self.length)
         for _ in range(self.count):
-            sx, sy = rng.uniform(*self.size, size=2)
-            cx = rng.uniform(self.start_x + 0.5 * sx, self.start_x + self.length - 0.5 * sx)
-            cy = rng.uniform(-0.5 * self.width + 0.5 * sy, 0.5 * self.width - 0.5 * sy)
-            pits.append((float(cx), float(cy), 0.5 * float(sx), 0.5 * float(sy), -self.depth))
+            pits.append((*scatter(rng, self.size, span, self.width), -self.depth))
         object.__setattr__(self, "pits", tuple(pits))
 
     @property
