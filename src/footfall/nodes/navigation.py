@@ -269,10 +269,6 @@ class NavigatorNode:
             "routes_blocked": self.blocked_count,
         }
 
-    def route_blocked_discs(self, t: float) -> list[tuple[float, float, float]]:
-        """Discs ``(x, y, radius)`` kept out of routes at time ``t`` [m]."""
-        return [(x, y, r) for x, y, r, until in self._blocked if until > t]
-
     def close(self) -> None:
         """Stop the worker thread."""
         if self._pool is not None:

@@ -124,11 +124,6 @@ class Route:
     cost: float
     goal_on_map: bool
 
-    @property
-    def length_m(self) -> float:
-        """Length of the polyline [m]."""
-        return float(np.sum(np.linalg.norm(np.diff(self.points_in_world, axis=0), axis=1)))
-
 
 @dataclass(frozen=True)
 class NoRoute:
