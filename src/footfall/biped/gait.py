@@ -78,6 +78,8 @@ class GaitPattern:
         com_height: ``z_c`` of the cart-table model [m].
         feet: Per side, sole centre positions, shape (k, 3) [m].
         foot_yaw: Per side, headings, shape (k,) [rad].
+        swing: Per side, progress of the foot's swing (0 to 1, minimum-jerk), NaN while it
+            stands.
         support: Per sample, ``SUPPORT_DOUBLE``, ``SUPPORT_LEFT`` or ``SUPPORT_RIGHT``.
         footholds: Planned footholds in the order they are stepped on, shape (m, 2) [m].
         foothold_sides: Side of each foothold.
@@ -90,6 +92,7 @@ class GaitPattern:
     com_height: float
     feet: dict[str, npt.NDArray[np.float64]]
     foot_yaw: dict[str, npt.NDArray[np.float64]]
+    swing: dict[str, npt.NDArray[np.float64]]
     support: npt.NDArray[np.int8]
     footholds: npt.NDArray[np.float64]
     foothold_sides: tuple[str, ...]
@@ -211,8 +214,9 @@ def gait_pattern(
     }
     lift = {s: np.zeros(k) for s in initial_feet}
     yaw = {s: np.full(k, float(initial_feet[s][2])) for s in initial_feet}
+    progress = {s: np.full(k, np.nan) for s in initial_feet}
     support = np.full(k, SUPPORT_DOUBLE, dtype=np.int8)
-    zmp = np.empty((k, 2))
+    zmp = np.full((k, 2), np.nan)
     where = {s: (np.array(initial_feet[s][:2], dtype=np.float64), float(initial_feet[s][2]))
              for s in initial_feet}  # fmt: skip
     mid = 0.5 * (where["left"][0] + where["right"][0])
@@ -221,8 +225,10 @@ def gait_pattern(
     win = time <= begin
     zmp[win] = mid + minimum_jerk((time[win] - c.hold_time) / c.start_time)[:, None] * (first - mid)
     landing = [0.0]
+    # Step n runs from bounds[n - 1] to bounds[n]; every sample falls in exactly one window.
+    bounds = begin + np.arange(n_steps + 1) * c.step_time
     for n in range(1, n_steps + 1):
-        t0 = begin + (n - 1) * c.step_time
+        t0 = float(bounds[n - 1])
         side = footsteps.sides[n]
         stance = footsteps.positions[n - 1]
         target = footsteps.positions[n]
@@ -232,6 +238,7 @@ def gait_pattern(
         tau = (time[swing] - t0) / single
         s = minimum_jerk(tau)
         pos[side][swing] = p0 + s[:, None] * (target - p0)
+        progress[side][swing] = s
         yaw[side][swing] = h0 + s * float(_wrap(h1 - h0))
         lift[side][swing] = c.step_height * 0.5 * (1.0 - np.cos(2 * math.pi * tau))
         support[swing] = SUPPORT_RIGHT if side == "left" else SUPPORT_LEFT
@@ -240,7 +247,7 @@ def gait_pattern(
         pos[side][after] = target
         yaw[side][after] = h1
         where[side] = (np.asarray(target, dtype=np.float64), h1)
-        double = after & (time <= t0 + c.step_time)
+        double = after & (time <= bounds[n])
         duration = c.step_time - single
         if n < n_steps:
             goal = target
@@ -250,8 +257,10 @@ def gait_pattern(
             tau = (time[double] - t0 - single) / duration
             zmp[double] = stance + minimum_jerk(tau)[:, None] * (goal - stance)
         landing.append(t0 + single)
-    end = time > begin + n_steps * c.step_time
+    end = time > bounds[-1]
     zmp[end] = 0.5 * (footsteps.positions[-2] + footsteps.positions[-1])
+    if not np.all(np.isfinite(zmp)):
+        raise ConfigError("the ZMP reference has samples outside every phase (a bug)")
     com = preview_com(zmp, com_height, c.dt, c.preview_time)
     feet = {s: np.column_stack([pos[s], lift[s]]) for s in pos}
     return GaitPattern(
@@ -261,6 +270,7 @@ def gait_pattern(
         com_height=com_height,
         feet=feet,
         foot_yaw=yaw,
+        swing=progress,
         support=support,
         footholds=np.asarray(footsteps.positions, dtype=np.float64),
         foothold_sides=tuple(footsteps.sides),

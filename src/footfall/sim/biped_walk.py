@@ -34,6 +34,8 @@ LOADED_FORCE = 20.0
 # tilts more than FALL_TILT.
 FALL_HEIGHT_FRACTION = 0.6
 FALL_TILT = math.radians(40.0)
+# Time constant with which the COM pattern follows the standing feet [s].
+ANCHOR_FILTER = 0.15
 
 
 @dataclass(frozen=True)
@@ -205,6 +207,10 @@ class BipedSimulation:
         """Measured whole-body COM [m]."""
         return self.data.subtree_com[self._hip].copy()
 
+    def sole_rotation(self, side: str) -> npt.NDArray[np.float64]:
+        """Orientation of a foot in the world, shape (3, 3)."""
+        return self.data.site_xmat[self._sole[side]].reshape(3, 3).copy()
+
     def sole(self, side: str) -> npt.NDArray[np.float64]:
         """Sole centre of a foot in the world [m]."""
         return self.data.site_xpos[self._sole[side]].copy()
@@ -259,13 +265,17 @@ class GaitController:
         self.shift = np.zeros(2)
         self.zmp_filtered: npt.NDArray[np.float64] | None = None
         self._hip_offset = np.zeros(2)  # hip frame minus body COM, learnt tick by tick
+        # Where each foot really is against the pattern (x, y, yaw), and the same at lift-off.
+        self.foot_offset = {side: np.zeros(3) for side in SIDES}
+        self._lift_off: dict[str, npt.NDArray[np.float64] | None] = dict.fromkeys(SIDES)
+        self.anchor = np.zeros(2)  # the pattern's COM and ZMP shift to the feet's offsets
 
     def pose_at(self, i: int, tilt: tuple[float, float] = (0.0, 0.0)):
         """Hip pose and joint targets for pattern sample ``i`` plus the COM shift."""
         p, spec = self.pattern, self.sim.spec
         yaw = _mean_angle(p.foot_yaw["left"][i], p.foot_yaw["right"][i])
         rotation = rot_z(yaw) @ rot_x(tilt[0]) @ rot_y(tilt[1])
-        com_target = p.com[i] + self.shift
+        com_target = p.com[i] + self.anchor + self.shift
         hip = np.array([*(com_target + self._hip_offset), spec.hip_height])
         for _ in range(2):
             joints = self.joint_targets(hip, rotation, i)
@@ -279,23 +289,58 @@ class GaitController:
         p = self.pattern
         q = []
         for side in SIDES:
-            foot = p.feet[side][i]
-            r_foot = rot_z(p.foot_yaw[side][i])
+            off = self.foot_offset[side]
+            foot = p.feet[side][i] + np.array([off[0], off[1], 0.0])
+            r_foot = rot_z(p.foot_yaw[side][i] + off[2])
             q.append(
                 leg_inverse(self.sim.spec, side, rotation.T @ (foot - hip), rotation.T @ r_foot)
             )
         return np.concatenate(q)
 
+    def track_feet(self, i: int, dt: float) -> None:
+        """Follow the feet where they stand, and carry each swing back onto the plan.
+
+        A standing foot is commanded where it is (no leg pushes it across the floor); a
+        swing starts from where its foot stood and ends on the planned foothold, so slips
+        do not add up from step to step; the COM pattern moves with the standing feet.
+        """
+        p = self.pattern
+        standing = []
+        for side in SIDES:
+            progress = p.swing[side][i]
+            if math.isnan(progress):
+                actual = self.sim.sole(side)
+                r = self.sim.sole_rotation(side)
+                planned = p.feet[side][i]
+                yaw = math.atan2(r[1, 0], r[0, 0]) - p.foot_yaw[side][i]
+                self.foot_offset[side] = np.array(
+                    [
+                        actual[0] - planned[0],
+                        actual[1] - planned[1],
+                        math.atan2(math.sin(yaw), math.cos(yaw)),
+                    ]
+                )
+                self._lift_off[side] = None
+                standing.append(self.foot_offset[side][:2])
+            else:
+                if self._lift_off[side] is None:
+                    self._lift_off[side] = self.foot_offset[side].copy()
+                self.foot_offset[side] = self._lift_off[side] * (1.0 - progress)
+        target = np.mean(standing, axis=0) if standing else self.anchor
+        a = dt / (ANCHOR_FILTER + dt)
+        self.anchor = self.anchor + a * (target - self.anchor)
+
     def update(self, i: int, dt: float) -> npt.NDArray[np.float64]:
         """One tick: read the sensors, update the stabiliser, return joint targets."""
         c = self.config
+        self.track_feet(i, dt)
         zmp, _ = self.sim.measured_zmp()
         if zmp is not None:
             if self.zmp_filtered is None:
                 self.zmp_filtered = zmp
             a = dt / (c.zmp_filter + dt)
             self.zmp_filtered = self.zmp_filtered + a * (zmp - self.zmp_filtered)
-            error = self.zmp_filtered - self.pattern.zmp[i]
+            error = self.zmp_filtered - (self.pattern.zmp[i] + self.anchor)
             self.shift += dt * (c.zmp_gain * error - c.com_gain * self.shift)
             self.shift = np.clip(self.shift, -c.max_shift, c.max_shift)
         roll, pitch, _ = self.sim.attitude()
@@ -357,9 +402,9 @@ def run_pattern(
         zmp, hull = sim.measured_zmp()
         log.time.append(t)
         log.com.append(sim.com()[:2])
-        log.com_ref.append(pattern.com[i].copy())
+        log.com_ref.append(pattern.com[i] + controller.anchor)
         log.zmp.append(np.full(2, np.nan) if zmp is None else zmp)
-        log.zmp_ref.append(pattern.zmp[i].copy())
+        log.zmp_ref.append(pattern.zmp[i] + controller.anchor)
         log.zmp_margin.append(np.nan if zmp is None else polygon_margin(hull, zmp))
         log.feet.append(np.concatenate([sim.sole(s)[:2] for s in SIDES]))
         log.joints.append(sim.joints)

@@ -1,0 +1,48 @@
+"""One look of the biped's head camera: depth image -> point cloud -> obstacle circles.
+
+The cloud goes to the map frame with the camera's pose (the simulator's; Archie has no
+pose estimator of its own), then through the dissertation's detector (§6.3.1) with the
+floor at z = 0 known. Circles seen before are kept (the robot remembers what has gone out
+of view); a new circle that overlaps a remembered one replaces it when it is larger, so
+an obstacle seen from nearer or from another side grows to its fuller outline.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from footfall.biped.avoidance import Circle
+from footfall.biped.obstacles import DetectionConfig, detect_obstacles
+from footfall.errors import DatasetError
+from footfall.sim.biped_walk import BipedSimulation
+from footfall.sim.camera import SimDepthCamera
+
+DETECTION = DetectionConfig(ground="plane", ground_height=0.0, voxel_size=0.03)
+
+
+def cloud_in_world(camera: SimDepthCamera, sim: BipedSimulation) -> np.ndarray:
+    """The camera's current view as points in the world frame, shape (n, 3) [m]."""
+    depth, pose = camera.capture(sim.data)
+    points, _ = camera.intrinsics.depth_to_points(depth)
+    return pose.rotation.apply(points) + pose.position
+
+
+def merge_circles(known: list[Circle], new: list[Circle]) -> list[Circle]:
+    """Remembered circles plus new ones; overlapping pairs keep the larger circle."""
+    out = list(known)
+    for c in new:
+        overlapping = [k for k in out if np.hypot(k.x - c.x, k.y - c.y) < max(k.r, c.r)]
+        if any(k.r >= c.r for k in overlapping):
+            continue
+        out = [k for k in out if k not in overlapping] + [c]
+    return out
+
+
+def look(camera: SimDepthCamera, sim: BipedSimulation, known: list[Circle]) -> list[Circle]:
+    """Update the remembered obstacle circles with what the camera sees now."""
+    points = cloud_in_world(camera, sim)
+    try:
+        detection = detect_obstacles(points, frame="map", config=DETECTION)
+    except DatasetError:  # nothing but floor, or nothing at all, in view
+        return known
+    return merge_circles(known, detection.circles)

@@ -1,0 +1,304 @@
+"""``footfall walk-biped``: Archie walks a plan in MuJoCo, on a map or through a seeded room.
+
+A dissertation map or a map file brings its obstacles (standing cylinders where the map
+has circles) and its goal: the whole walk is planned once (path, footsteps, LIPM pattern,
+§6.3) and executed. In a room the robot knows nothing in advance: it looks with its head
+camera, detects obstacles in the point cloud (§6.3.1), plans from where it stands to the
+goal around every obstacle seen so far, walks at most ``look_ahead_m`` of that path, stops
+with its feet together and looks again; a new obstacle in view changes the next plan.
+
+Planning uses the body's footprint, not the map's nominal hip width: obstacles grow by
+the widest reach of the feet and hip from the COM path plus a margin, so a body that
+follows its footsteps does not touch them.
+
+Frames: the world (map) frame, z up, start at the map's start.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from footfall.biped.avoidance import Circle
+from footfall.biped.body import SIDES, BipedSpec, load_biped_spec
+from footfall.biped.footsteps import Footsteps, plan_footsteps
+from footfall.biped.gait import GaitConfig, GaitPattern, gait_pattern
+from footfall.biped.lipm import LipmConfig
+from footfall.biped.maps import FOOT_LENGTH, PlanMap, dissertation_map, load_map
+from footfall.biped.planner import WalkPlan, plan_walk
+from footfall.errors import ConfigError, PlanningError
+from footfall.sim.biped_model import Obstacle, biped_mjcf, camera_mount
+from footfall.sim.biped_room import Room, make_room
+from footfall.sim.biped_walk import (
+    BipedRun,
+    BipedSimulation,
+    StabiliserConfig,
+    run_pattern,
+    start_pose,
+)
+
+OBSTACLE_HEIGHT = 0.5  # cylinders standing for a map's circles [m]
+CLEARANCE = 0.05  # margin between the body's reach and an obstacle [m]
+GOAL_TOLERANCE = 0.25  # the walk reached its goal when the COM ends this close [m]
+
+
+@dataclass(frozen=True)
+class WalkBipedRequest:
+    """What to walk: exactly one of a case, a map file and a room seed.
+
+    Attributes:
+        case: One of the dissertation's 11 maps.
+        map: A JSON map file.
+        room: Seed of a random room seen through the camera.
+        goal: Goal instead of the source's [m].
+        spec: Biped spec name or TOML file.
+        stabiliser: Stabiliser gains.
+        look_ahead_m: In a room, how far to walk between looks [m].
+        max_looks: In a room, the most looks before giving up.
+    """
+
+    case: int | None = None
+    map: Path | None = None
+    room: int | None = None
+    goal: tuple[float, float] | None = None
+    spec: str = "archie"
+    stabiliser: StabiliserConfig = field(default_factory=StabiliserConfig)
+    look_ahead_m: float = 1.5
+    max_looks: int = 12
+
+    def __post_init__(self) -> None:
+        if sum(v is not None for v in (self.case, self.map, self.room)) != 1:
+            raise ConfigError("walk-biped needs exactly one of --case, --map and --room")
+
+
+def body_radius(spec: BipedSpec, step_width: float) -> float:
+    """The farthest the body reaches from the COM path: a foot's corner or the hip's [m]."""
+    foot = 0.5 * step_width + math.hypot(0.5 * spec.foot_length, 0.5 * spec.foot_width)
+    hip = math.hypot(0.5 * spec.pelvis_size[0], 0.5 * spec.pelvis_size[1])
+    return max(foot, hip)
+
+
+def body_plan_map(plan_map: PlanMap, spec: BipedSpec) -> PlanMap:
+    """The map with its hip width grown so inflation covers the body (see the module doc)."""
+    reach = body_radius(spec, plan_map.limits.width) + CLEARANCE
+    hip_width = max(plan_map.hip_width, 2.0 * reach - FOOT_LENGTH)
+    return replace(plan_map, hip_width=hip_width)
+
+
+def _cylinders(circles: tuple[Circle, ...]) -> tuple[Obstacle, ...]:
+    return tuple(Obstacle("cylinder", c.x, c.y, 2 * c.r, 2 * c.r, OBSTACLE_HEIGHT) for c in circles)
+
+
+@dataclass
+class Segment:
+    """One planned and walked piece of the walk."""
+
+    plan: WalkPlan
+    pattern: GaitPattern
+    run: BipedRun
+    seen: tuple[Circle, ...] = ()
+
+
+@dataclass
+class BipedWalk:
+    """A finished ``walk-biped``."""
+
+    name: str
+    plan_map: PlanMap
+    obstacles: tuple[Obstacle, ...]
+    segments: list[Segment]
+    reached_goal: bool
+    fell: bool
+    collisions: int
+    no_route: str | None
+    spec: BipedSpec
+
+    def metrics(self) -> dict[str, object]:
+        """The ``metrics.json`` content."""
+        logs = [s.run.log.arrays() for s in self.segments]
+        margin = np.concatenate([a["zmp_margin"] for a in logs]) if logs else np.array([np.nan])
+        com_err = np.concatenate(
+            [np.linalg.norm(a["com"] - a["com_ref"], axis=1) for a in logs]
+        ) if logs else np.array([np.nan])  # fmt: skip
+        errors = []
+        for s in self.segments:
+            planned = s.pattern.footholds[1 : 1 + len(s.run.actual_footholds)]
+            errors += list(np.linalg.norm(s.run.actual_footholds - planned, axis=1))
+        sim_s = sum(s.run.sim_seconds for s in self.segments)
+        wall_s = sum(s.run.wall_seconds for s in self.segments)
+        finite = margin[np.isfinite(margin)]
+        return {
+            "name": self.name,
+            "reached_goal": self.reached_goal,
+            "fell": self.fell,
+            "collisions": self.collisions,
+            "zmp_margin_min_m": float(finite.min()) if len(finite) else None,
+            "footstep_error_mean_m": float(np.mean(errors)) if errors else None,
+            "footstep_error_max_m": float(np.max(errors)) if errors else None,
+            "com_tracking_error_max_m": float(np.nanmax(com_err)) if len(com_err) else None,
+            "realtime_factor": sim_s / wall_s if wall_s > 0 else None,
+            "sim_seconds": sim_s,
+            "footsteps": int(sum(len(s.run.actual_footholds) for s in self.segments)),
+            "plans": len(self.segments),
+            "no_route": self.no_route,
+            "goal": list(self.plan_map.goal),
+            "final_com": (self.segments[-1].run.log.com[-1].tolist() if self.segments else None),
+            "simulator_warnings": int(sum(s.run.warnings for s in self.segments)),
+        }
+
+
+def _standing_feet(
+    sim: BipedSimulation,
+) -> tuple[dict[str, tuple[float, float, float]], npt.NDArray[np.float64], float]:
+    """The feet where they stand, their midpoint and heading."""
+    feet = {}
+    for side in SIDES:
+        p = sim.sole(side)
+        r = sim.data.site_xmat[sim.model.site(f"{side}_sole").id].reshape(3, 3)
+        feet[side] = (float(p[0]), float(p[1]), math.atan2(r[1, 0], r[0, 0]))
+    mid = 0.5 * (np.array(feet["left"][:2]) + np.array(feet["right"][:2]))
+    yaw = math.atan2(
+        math.sin(feet["left"][2]) + math.sin(feet["right"][2]),
+        math.cos(feet["left"][2]) + math.cos(feet["right"][2]),
+    )
+    return feet, mid, yaw
+
+
+def _ideal_feet(start, heading: float, width: float) -> dict[str, tuple[float, float, float]]:
+    normal = np.array([-math.sin(heading), math.cos(heading)])
+    s = np.asarray(start, dtype=np.float64)
+    left, right = s + 0.5 * width * normal, s - 0.5 * width * normal
+    return {"left": (*left, heading), "right": (*right, heading)}
+
+
+def com_height(spec: BipedSpec) -> float:
+    """The COM's height while standing at the walking hip height [m]."""
+    model = mujoco.MjModel.from_xml_string(biped_mjcf(spec))
+    sim = BipedSimulation(spec, model)
+    steps = plan_footsteps(
+        np.array([[0.0, 0.0], [0.1, 0.0]]), PlanMap("x", (0, 0), (1, 0), ()).limits
+    )
+    pattern = gait_pattern(steps, _ideal_feet((0, 0), 0.0, 0.2), 0.6)
+    start_pose(sim, pattern)
+    return float(sim.com()[2])
+
+
+def _gait(spec: BipedSpec, footsteps: Footsteps, feet, z_c: float, lipm: LipmConfig) -> GaitPattern:
+    return gait_pattern(
+        footsteps, feet, z_c, GaitConfig(step_time=lipm.support_time, step_height=spec.step_height)
+    )
+
+
+def walk_plan_map(
+    plan_map: PlanMap, spec: BipedSpec, stabiliser: StabiliserConfig, name: str
+) -> BipedWalk:
+    """Plan a known map once and walk it."""
+    z_c = com_height(spec)
+    lipm = LipmConfig(com_height=z_c)
+    obstacles = _cylinders(plan_map.obstacles)
+    heading = 0.0
+    feet = _ideal_feet(plan_map.start, heading, plan_map.limits.width)
+    model = mujoco.MjModel.from_xml_string(biped_mjcf(spec, obstacles))
+    sim = BipedSimulation(spec, model)
+    try:
+        plan = plan_walk(body_plan_map(plan_map, spec), lipm)
+    except PlanningError as exc:
+        return BipedWalk(name, plan_map, obstacles, [], False, False, 0, str(exc), spec)
+    pattern = _gait(spec, plan.footsteps, feet, z_c, lipm)
+    start_pose(sim, pattern)
+    run = run_pattern(sim, pattern, stabiliser)
+    reached = not run.fell and _near(sim.com()[:2], plan_map.goal)
+    segment = Segment(plan, pattern, run)
+    return BipedWalk(
+        name, plan_map, obstacles, [segment], reached, run.fell, run.collisions, None, spec
+    )
+
+
+def _near(point, goal) -> bool:
+    return float(np.hypot(*(np.asarray(point) - np.asarray(goal)))) <= GOAL_TOLERANCE
+
+
+def _truncate(waypoints: npt.NDArray[np.float64], length: float) -> npt.NDArray[np.float64]:
+    """The path's first ``length`` metres."""
+    out = [waypoints[0]]
+    left = length
+    for a, b in itertools.pairwise(waypoints):
+        d = float(np.hypot(*(b - a)))
+        if d >= left:
+            out.append(a + (b - a) * (left / d) if d > 0 else b)
+            return np.array(out)
+        out.append(b)
+        left -= d
+    return np.array(out)
+
+
+def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWalk:
+    """Look, plan, walk a stretch, repeat: the room seen only through the head camera."""
+    from footfall.sim.biped_look import look
+
+    z_c = com_height(spec)
+    lipm = LipmConfig(com_height=z_c)
+    mount = camera_mount(spec)
+    model = mujoco.MjModel.from_xml_string(biped_mjcf(spec, room.obstacles, mount))
+    sim = BipedSimulation(spec, model)
+    base = PlanMap(room.name, room.start, room.goal, ())
+    limits = base.limits
+    feet = _ideal_feet(room.start, 0.0, limits.width)
+    steps = plan_footsteps(np.array([room.start, room.start]), limits)
+    start_pose(sim, _gait(spec, steps, feet, z_c, lipm))
+    seen: list[Circle] = []
+    segments: list[Segment] = []
+    no_route = None
+    from footfall.sim.camera import SimDepthCamera
+
+    camera = SimDepthCamera(model, mount)
+    try:
+        for _ in range(request.max_looks):
+            seen = look(camera, sim, seen)
+            feet, here, heading = _standing_feet(sim)
+            if _near(here, room.goal):
+                break
+            plan_map = body_plan_map(PlanMap(room.name, tuple(here), room.goal, tuple(seen)), spec)
+            try:
+                full = plan_walk(plan_map, lipm)
+            except PlanningError as exc:
+                no_route = str(exc)
+                break
+            stretch = _truncate(full.path.waypoints, request.look_ahead_m)
+            footsteps = plan_footsteps(stretch, limits, initial_heading=heading)
+            plan = replace(full, footsteps=footsteps)
+            pattern = _gait(spec, footsteps, feet, z_c, lipm)
+            run = run_pattern(sim, pattern, request.stabiliser)
+            segments.append(Segment(plan, pattern, run, tuple(seen)))
+            if run.fell:
+                break
+    finally:
+        camera.close()
+    fell = any(s.run.fell for s in segments)
+    reached = not fell and _near(sim.com()[:2], room.goal)
+    full_map = PlanMap(room.name, room.start, room.goal, tuple(seen))
+    return BipedWalk(
+        room.name, full_map, room.obstacles, segments, reached, fell, sim.collisions, no_route, spec
+    )
+
+
+def walk_biped(request: WalkBipedRequest) -> BipedWalk:
+    """Run the walk a request asks for."""
+    spec = load_biped_spec(request.spec)
+    if request.room is not None:
+        room = make_room(request.room)
+        if request.goal is not None:
+            room = replace(room, goal=request.goal)
+        return walk_room(room, spec, request)
+    if request.case is not None:
+        plan_map, name = dissertation_map(request.case), f"case {request.case}"
+    else:
+        plan_map, name = load_map(request.map), Path(request.map).stem
+    plan_map = plan_map.with_endpoints(goal=request.goal)
+    return walk_plan_map(plan_map, spec, request.stabiliser, name)
