@@ -50,7 +50,7 @@ class GaitConfig:
     """
 
     step_time: float = 0.8
-    double_support: float = 0.2
+    double_support: float = 0.3
     step_height: float = 0.05
     hold_time: float = 0.8
     start_time: float = 1.0

@@ -10,10 +10,21 @@ import argparse
 
 from rich.console import Console
 
-from footfall.cli import bench, convert, map, obstacles, plan, replay, robot, station, walk
+from footfall.cli import (
+    bench,
+    convert,
+    map,
+    obstacles,
+    plan,
+    replay,
+    robot,
+    station,
+    walk,
+    walk_biped,
+)
 from footfall.errors import FootfallError
 
-SUBCOMMANDS = (walk, map, replay, convert, bench, plan, obstacles, robot, station)
+SUBCOMMANDS = (walk, map, replay, convert, bench, plan, obstacles, robot, station, walk_biped)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -133,6 +133,23 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "--out", type=Path, default=Path("footfall-out/bench-soak"), help="output folder"
     )
     soak.set_defaults(handler=run_soak)
+    biped = kinds.add_parser(
+        "biped",
+        help="Archie on the dissertation's 11 maps and random rooms",
+        description=(
+            "Walk the biped on the 11 test maps of the dissertation (§6.3.2) and on --seeds "
+            "random rooms seen through its head camera; writes bench.json (per run: reached "
+            "goal, fall, collisions, ZMP margin, footstep and COM errors; totals per kind)."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    biped.add_argument("--seeds", type=int, default=5, help="random rooms to walk")
+    biped.add_argument("--first-seed", type=int, default=0, help="the rooms' seeds start here")
+    biped.add_argument("--jobs", type=int, default=1, help="walks run in parallel")
+    biped.add_argument(
+        "--out", type=Path, default=Path("footfall-out/bench-biped"), help="output folder"
+    )
+    biped.set_defaults(handler=run_biped)
 
 
 def _progress(console: Console, unit: str = "") -> Progress:
@@ -305,3 +322,41 @@ def run_soak(args: argparse.Namespace, console: Console) -> int:
         console.print(table)
     wrote(console, paths)
     return 0 if not figures.get("ended_early") else 1
+
+
+def run_biped(args: argparse.Namespace, console: Console) -> int:
+    """Walk the biped's maps and rooms and print the table."""
+    from footfall.biped.maps import TEST_CASES
+    from footfall.reports.biped_walk import run_biped_bench
+
+    with _progress(console, "walks") as progress:
+        task = progress.add_task("walking", total=len(TEST_CASES) + max(args.seeds, 0))
+        report = run_biped_bench(
+            args.seeds,
+            first_seed=args.first_seed,
+            jobs=args.jobs,
+            on_run=lambda label: progress.update(task, advance=1, description=label),
+        )
+    paths = report.write(args.out)
+    bench = report.to_json()
+    table = Table(title=f"biped benchmark: 11 maps, {args.seeds} rooms")
+    for column in ("run", "goal", "fell", "collisions", "ZMP margin", "footstep error"):
+        table.add_column(column)
+    for r in bench["runs"]:
+        margin, error = r["zmp_margin_min_m"], r["footstep_error_mean_m"]
+        table.add_row(
+            r["name"],
+            "yes" if r["reached_goal"] else "no",
+            "yes" if r["fell"] else "no",
+            str(r["collisions"]),
+            "n/a" if margin is None else f"{100 * margin:.1f} cm",
+            "n/a" if error is None else f"{100 * error:.1f} cm",
+        )
+    console.print(table)
+    for kind, s in bench["summary"].items():
+        console.print(
+            f"{kind}s: {s['reached_goal']}/{s['runs']} reached the goal, {s['falls']} falls, "
+            f"{s['collisions']} collisions"
+        )
+    wrote(console, paths)
+    return 0

@@ -14,7 +14,7 @@ import numpy as np
 from footfall.biped.avoidance import Circle
 from footfall.biped.obstacles import DetectionConfig, detect_obstacles
 from footfall.errors import DatasetError
-from footfall.sim.biped_walk import BipedSimulation
+from footfall.sim.biped_sim import BipedSimulation
 from footfall.sim.camera import SimDepthCamera
 
 DETECTION = DetectionConfig(ground="plane", ground_height=0.0, voxel_size=0.03)

@@ -35,13 +35,8 @@ from footfall.biped.planner import WalkPlan, plan_walk
 from footfall.errors import ConfigError, PlanningError
 from footfall.sim.biped_model import Obstacle, biped_mjcf, camera_mount
 from footfall.sim.biped_room import Room, make_room
-from footfall.sim.biped_walk import (
-    BipedRun,
-    BipedSimulation,
-    StabiliserConfig,
-    run_pattern,
-    start_pose,
-)
+from footfall.sim.biped_sim import BipedSimulation
+from footfall.sim.biped_walk import BipedRun, StabiliserConfig, run_pattern, start_pose
 
 OBSTACLE_HEIGHT = 0.5  # cylinders standing for a map's circles [m]
 CLEARANCE = 0.05  # margin between the body's reach and an obstacle [m]
@@ -141,7 +136,9 @@ class BipedWalk:
             "zmp_margin_min_m": float(finite.min()) if len(finite) else None,
             "footstep_error_mean_m": float(np.mean(errors)) if errors else None,
             "footstep_error_max_m": float(np.max(errors)) if errors else None,
-            "com_tracking_error_max_m": float(np.nanmax(com_err)) if len(com_err) else None,
+            "com_tracking_error_max_m": (
+                float(np.nanmax(com_err)) if np.isfinite(com_err).any() else None
+            ),
             "realtime_factor": sim_s / wall_s if wall_s > 0 else None,
             "sim_seconds": sim_s,
             "footsteps": int(sum(len(s.run.actual_footholds) for s in self.segments)),

@@ -1,0 +1,149 @@
+"""Figures of a biped walk in MuJoCo: top view, COM and ZMP against the support, joints."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from footfall.biped.body import JOINTS, SIDES
+from footfall.plots import save_figure
+
+
+def _foot(ax, p, heading, spec, **style) -> None:
+    from matplotlib.patches import Rectangle
+
+    c, s = np.cos(heading), np.sin(heading)
+    corner = np.asarray(p) - np.array([[c, -s], [s, c]]) @ [
+        0.5 * spec.foot_length,
+        0.5 * spec.foot_width,
+    ]
+    ax.add_patch(
+        Rectangle(
+            tuple(corner),
+            spec.foot_length,
+            spec.foot_width,
+            angle=float(np.degrees(heading)),
+            fill=False,
+            **style,
+        )
+    )
+
+
+def plot_biped_top(walk, path: Path) -> Path:
+    """Obstacles red, path blue, planned footsteps green, actual feet black."""
+    from matplotlib.patches import Circle as CirclePatch
+    from matplotlib.patches import Rectangle
+
+    fig, ax = plt.subplots(figsize=(9, 7), constrained_layout=True)
+    for o in walk.obstacles:
+        if o.kind == "cylinder":
+            ax.add_patch(CirclePatch((o.x, o.y), 0.5 * o.size_x, color="red", alpha=0.6))
+        else:
+            c, s = np.cos(o.yaw), np.sin(o.yaw)
+            corner = np.array([o.x, o.y]) - np.array([[c, -s], [s, c]]) @ [
+                0.5 * o.size_x,
+                0.5 * o.size_y,
+            ]
+            ax.add_patch(
+                Rectangle(
+                    tuple(corner),
+                    o.size_x,
+                    o.size_y,
+                    angle=float(np.degrees(o.yaw)),
+                    color="red",
+                    alpha=0.6,
+                )
+            )
+    for c in walk.plan_map.obstacles if walk.segments and walk.segments[-1].seen else ():
+        ax.add_patch(CirclePatch((c.x, c.y), c.r, fill=False, ls="--", color="red", lw=0.8))
+    spec = walk.spec
+    for k, seg in enumerate(walk.segments):
+        w = seg.plan.path.waypoints
+        ax.plot(w[:, 0], w[:, 1], "-", color="blue", lw=1.2, label="path" if k == 0 else None)
+        f = seg.plan.footsteps
+        for p, h in zip(f.positions, f.headings, strict=True):
+            _foot(ax, p, h, spec, color="green", lw=0.9)
+        for p, h in zip(
+            seg.run.actual_footholds, f.headings[1 : 1 + len(seg.run.actual_footholds)], strict=True
+        ):
+            _foot(ax, p, h, spec, color="black", lw=0.7)
+        com = np.asarray(seg.run.log.com)
+        ax.plot(com[:, 0], com[:, 1], color="grey", lw=0.6, label="COM" if k == 0 else None)
+    ax.plot(*walk.plan_map.start, "s", color="blue", ms=8, label="start")
+    ax.plot(*walk.plan_map.goal, "*", color="blue", ms=12, label="goal")
+    ax.plot([], [], color="green", label="planned footsteps")
+    ax.plot([], [], color="black", label="actual feet")
+    ax.plot([], [], color="red", alpha=0.6, lw=6, label="obstacles")
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    state = "reached the goal" if walk.reached_goal else ("fell" if walk.fell else "stopped")
+    ax.set_title(f"{walk.name}: {state}, {walk.collisions} collisions")
+    return save_figure(fig, path)
+
+
+def _concat(walk, key: str):
+    t0, out_t, out = 0.0, [], []
+    for seg in walk.segments:
+        a = seg.run.log.arrays()
+        out_t.append(a["time"] + t0)
+        out.append(a[key])
+        t0 += seg.run.sim_seconds
+    if not out:
+        return np.zeros(0), np.zeros((0, 2))
+    return np.concatenate(out_t), np.concatenate(out)
+
+
+def plot_biped_balance(walk, path: Path) -> Path:
+    """COM and ZMP (measured and planned) in x and y over time inside the support's extent."""
+    fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True, constrained_layout=True)
+    t, com = _concat(walk, "com")
+    _, zmp = _concat(walk, "zmp")
+    _, ref = _concat(walk, "zmp_ref")
+    _, margin = _concat(walk, "zmp_margin")
+    lo, hi = [], []
+    for seg in walk.segments:
+        for hull in seg.run.log.support_polygon:
+            lo.append(hull.min(axis=0) if hull is not None else (np.nan, np.nan))
+            hi.append(hull.max(axis=0) if hull is not None else (np.nan, np.nan))
+    lo, hi = np.array(lo).reshape(-1, 2), np.array(hi).reshape(-1, 2)
+    for axis, ax in enumerate(axes[:2]):
+        if len(t):
+            ax.fill_between(t, lo[:, axis], hi[:, axis], color="green", alpha=0.2, label="support")
+            ax.plot(t, com[:, axis], color="black", lw=1.0, label="COM")
+            ax.plot(t, zmp[:, axis], color="red", lw=0.6, label="ZMP measured")
+            ax.plot(t, ref[:, axis], color="blue", lw=0.8, ls="--", label="ZMP planned")
+        ax.set_ylabel(f"{'xy'[axis]} [m]")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper left", fontsize=7)
+    axes[2].plot(t, 100 * margin, color="purple", lw=0.8)
+    axes[2].axhline(0.0, color="red", lw=0.8)
+    axes[2].set_ylabel("ZMP margin [cm]")
+    axes[2].set_xlabel("time [s]")
+    axes[2].grid(alpha=0.3)
+    axes[0].set_title(f"{walk.name}: centre of mass and ZMP against the support polygon")
+    return save_figure(fig, path)
+
+
+def plot_biped_joints(walk, path: Path) -> Path:
+    """The twelve joint angles over time, measured."""
+    fig, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True, constrained_layout=True)
+    t, q = _concat(walk, "joints")
+    for k, side in enumerate(SIDES):
+        for j, name in enumerate(JOINTS):
+            if len(t):
+                axes[k].plot(t, np.degrees(q[:, 6 * k + j]), lw=0.8, label=name)
+        axes[k].set_ylabel(f"{side} [deg]")
+        axes[k].grid(alpha=0.3)
+        axes[k].legend(loc="upper right", fontsize=7, ncol=3)
+    axes[1].set_xlabel("time [s]")
+    axes[0].set_title(f"{walk.name}: joint angles")
+    return save_figure(fig, path)
