@@ -5,6 +5,11 @@ pose estimator of its own), then through the dissertation's detector (§6.3.1) w
 floor at z = 0 known. Circles seen before are kept (the robot remembers what has gone out
 of view); a new circle that overlaps a remembered one replaces it when it is larger, so
 an obstacle seen from nearer or from another side grows to its fuller outline.
+
+A camera sees only an obstacle's near faces, and the circles of a face alone leave its far
+side out. Each obstacle point is therefore extended away from the camera by
+``HIDDEN_DEPTH`` (an obstacle is taken to be at least that deep behind what is seen), and
+the extended cloud is what the detector clusters.
 """
 
 from __future__ import annotations
@@ -18,6 +23,8 @@ from footfall.sim.biped_sim import BipedSimulation
 from footfall.sim.camera import SimDepthCamera
 
 DETECTION = DetectionConfig(ground="plane", ground_height=0.0, voxel_size=0.03)
+HIDDEN_DEPTH = 0.3  # [m]
+HIDDEN_SPACING = 0.05  # [m]
 
 
 def cloud_in_world(camera: SimDepthCamera, sim: BipedSimulation) -> np.ndarray:
@@ -38,9 +45,23 @@ def merge_circles(known: list[Circle], new: list[Circle]) -> list[Circle]:
     return out
 
 
+def extend_hidden(points: np.ndarray, camera_xy: np.ndarray) -> np.ndarray:
+    """Points above the floor repeated behind themselves, away from the camera [m]."""
+    high = points[points[:, 2] > DETECTION.ground_clearance]
+    if len(high) == 0:
+        return points
+    away = high[:, :2] - camera_xy
+    away /= np.maximum(np.linalg.norm(away, axis=1, keepdims=True), 1e-9)
+    steps = np.arange(HIDDEN_SPACING, HIDDEN_DEPTH + 1e-9, HIDDEN_SPACING)
+    behind = [np.column_stack([high[:, :2] + d * away, high[:, 2]]) for d in steps]
+    return np.vstack([points, *behind])
+
+
 def look(camera: SimDepthCamera, sim: BipedSimulation, known: list[Circle]) -> list[Circle]:
     """Update the remembered obstacle circles with what the camera sees now."""
     points = cloud_in_world(camera, sim)
+    if len(points):
+        points = extend_hidden(points, camera.pose(sim.data).position[:2])
     try:
         detection = detect_obstacles(points, frame="map", config=DETECTION)
     except DatasetError:  # nothing but floor, or nothing at all, in view

@@ -64,8 +64,8 @@ class WalkBipedRequest:
     goal: tuple[float, float] | None = None
     spec: str = "archie"
     stabiliser: StabiliserConfig = field(default_factory=StabiliserConfig)
-    look_ahead_m: float = 1.5
-    max_looks: int = 12
+    look_ahead_m: float = 1.0
+    max_looks: int = 16
 
     def __post_init__(self) -> None:
         if sum(v is not None for v in (self.case, self.map, self.room)) != 1:
@@ -144,6 +144,7 @@ class BipedWalk:
             "footsteps": int(sum(len(s.run.actual_footholds) for s in self.segments)),
             "plans": len(self.segments),
             "no_route": self.no_route,
+            "stopped": next((s.run.stopped for s in self.segments if s.run.stopped), None),
             "goal": list(self.plan_map.goal),
             "final_com": (self.segments[-1].run.log.com[-1].tolist() if self.segments else None),
             "simulator_warnings": int(sum(s.run.warnings for s in self.segments)),
@@ -273,7 +274,7 @@ def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWa
             pattern = _gait(spec, footsteps, feet, z_c, lipm)
             run = run_pattern(sim, pattern, request.stabiliser)
             segments.append(Segment(plan, pattern, run, tuple(seen)))
-            if run.fell:
+            if run.fell or run.stopped:
                 break
     finally:
         camera.close()

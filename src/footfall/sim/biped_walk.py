@@ -24,11 +24,14 @@ import numpy.typing as npt
 
 from footfall.biped.body import SIDES, leg_inverse, rot_x, rot_y, rot_z
 from footfall.biped.gait import SUPPORT_DOUBLE, SUPPORT_LEFT, GaitPattern
+from footfall.errors import UnreachableTargetError
 from footfall.sim.biped_sim import BipedSimulation, polygon_margin
 
 CONTROL_PERIOD = 0.004  # [s]
 # Time constant with which the COM pattern follows the standing feet [s].
 ANCHOR_FILTER = 0.15
+# After a pose it cannot reach the robot holds its last targets this long [s].
+HOLD_AFTER_STOP = 1.0
 
 
 @dataclass(frozen=True)
@@ -188,6 +191,7 @@ class BipedRun:
     wall_seconds: float
     sim_seconds: float
     warnings: int
+    stopped: str | None = None
 
 
 def start_pose(sim: BipedSimulation, pattern: GaitPattern) -> None:
@@ -220,9 +224,19 @@ def run_pattern(
     landed: list[npt.NDArray[np.float64]] = []
     next_landing = 1
     settle = 0.5 * (1.0 - 0.0) * 0.2  # sample a foothold a moment after it is loaded
+    stopped = None
+    joints = sim.data.ctrl.copy()
     while t <= pattern.duration:
         i = pattern.index(t)
-        joints = controller.update(i, CONTROL_PERIOD)
+        if stopped is None:
+            try:
+                joints = controller.update(i, CONTROL_PERIOD)
+            except UnreachableTargetError as exc:
+                # Freeze: hold the last targets and watch whether it stays up.
+                stopped = str(exc)
+                hold_until = t + HOLD_AFTER_STOP
+        elif t >= hold_until:
+            break
         sim.command(joints)
         sim.step(CONTROL_PERIOD)
         t += CONTROL_PERIOD
@@ -256,6 +270,7 @@ def run_pattern(
         wall_seconds=time.perf_counter() - started,
         sim_seconds=t,
         warnings=sim.warnings_seen,
+        stopped=stopped,
     )
 
 
