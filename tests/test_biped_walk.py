@@ -16,9 +16,9 @@ from footfall.cli import main
 from footfall.errors import ConfigError
 from footfall.sim.biped_model import biped_mjcf
 from footfall.sim.biped_room import ROUTE_CLEARANCE, make_room
-from footfall.sim.biped_run import WalkBipedRequest, com_height, walk_biped
+from footfall.sim.biped_run import WalkBipedRequest, walk_biped
 from footfall.sim.biped_sim import BipedSimulation
-from footfall.sim.biped_walk import run_pattern, start_pose
+from footfall.sim.biped_walk import run_pattern, stand, start_pose
 
 SPEC = load_biped_spec()
 KAJITA = [WalkParameter(sx, 0.2) for sx in (0.0, 0.3, 0.3, 0.3, 0.0)]
@@ -29,7 +29,7 @@ def _kajita_walk():
     sim = BipedSimulation(SPEC, mujoco.MjModel.from_xml_string(biped_mjcf(SPEC)))
     steps = footsteps_from_parameters(KAJITA, (0.0, 0.0), first_step_left=False)
     lipm = LipmConfig()
-    pattern = gait_pattern(steps, FEET, com_height(SPEC), GaitConfig(step_time=lipm.support_time))
+    pattern = gait_pattern(steps, FEET, stand(sim, FEET), GaitConfig(step_time=lipm.support_time))
     start_pose(sim, pattern)
     return sim, run_pattern(sim, pattern)
 

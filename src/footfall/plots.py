@@ -323,6 +323,15 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
     return save_figure(fig, path)
 
 
+def add_rectangle(ax, centre, heading: float, length: float, width: float, **style) -> None:
+    """A rectangle centred at ``centre`` [m], its length along ``heading`` [rad]."""
+    from matplotlib.patches import Rectangle
+
+    c, s = np.cos(heading), np.sin(heading)
+    corner = np.asarray(centre) - np.array([[c, -s], [s, c]]) @ [0.5 * length, 0.5 * width]
+    ax.add_patch(Rectangle(tuple(corner), length, width, angle=float(np.degrees(heading)), **style))
+
+
 def plot_plan(plan, path: Path, title: str = "") -> Path:
     """Top view of a biped plan in the dissertation's colours.
 
@@ -334,7 +343,6 @@ def plot_plan(plan, path: Path, title: str = "") -> Path:
         title: Figure title.
     """
     from matplotlib.patches import Circle as CirclePatch
-    from matplotlib.patches import Rectangle
 
     from footfall.biped.planner import FOOT_LENGTH, FOOT_WIDTH
 
@@ -346,21 +354,7 @@ def plot_plan(plan, path: Path, title: str = "") -> Path:
             CirclePatch((grown.x, grown.y), grown.r, fill=False, ls="--", color="red", lw=0.8)
         )
     for p, h in zip(plan.footsteps.positions, plan.footsteps.headings, strict=True):
-        corner = p - np.array([[np.cos(h), -np.sin(h)], [np.sin(h), np.cos(h)]]) @ [
-            FOOT_LENGTH / 2,
-            FOOT_WIDTH / 2,
-        ]
-        ax.add_patch(
-            Rectangle(
-                tuple(corner),
-                FOOT_LENGTH,
-                FOOT_WIDTH,
-                angle=float(np.degrees(h)),
-                fill=False,
-                color="green",
-                lw=1.0,
-            )
-        )
+        add_rectangle(ax, p, h, FOOT_LENGTH, FOOT_WIDTH, fill=False, color="green", lw=1.0)
     w = plan.path.waypoints
     ax.plot(
         w[:, 0], w[:, 1], "-o", color="blue", ms=4, lw=1.5, label=f"path {plan.path.length:.2f} m"

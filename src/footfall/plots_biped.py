@@ -11,67 +11,33 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from footfall.biped.body import JOINTS, SIDES
-from footfall.plots import save_figure
-
-
-def _foot(ax, p, heading, spec, **style) -> None:
-    from matplotlib.patches import Rectangle
-
-    c, s = np.cos(heading), np.sin(heading)
-    corner = np.asarray(p) - np.array([[c, -s], [s, c]]) @ [
-        0.5 * spec.foot_length,
-        0.5 * spec.foot_width,
-    ]
-    ax.add_patch(
-        Rectangle(
-            tuple(corner),
-            spec.foot_length,
-            spec.foot_width,
-            angle=float(np.degrees(heading)),
-            fill=False,
-            **style,
-        )
-    )
+from footfall.plots import add_rectangle, save_figure
 
 
 def plot_biped_top(walk, path: Path) -> Path:
     """Obstacles red, path blue, planned footsteps green, actual feet black."""
     from matplotlib.patches import Circle as CirclePatch
-    from matplotlib.patches import Rectangle
 
     fig, ax = plt.subplots(figsize=(9, 7), constrained_layout=True)
     for o in walk.obstacles:
         if o.kind == "cylinder":
             ax.add_patch(CirclePatch((o.x, o.y), 0.5 * o.size_x, color="red", alpha=0.6))
         else:
-            c, s = np.cos(o.yaw), np.sin(o.yaw)
-            corner = np.array([o.x, o.y]) - np.array([[c, -s], [s, c]]) @ [
-                0.5 * o.size_x,
-                0.5 * o.size_y,
-            ]
-            ax.add_patch(
-                Rectangle(
-                    tuple(corner),
-                    o.size_x,
-                    o.size_y,
-                    angle=float(np.degrees(o.yaw)),
-                    color="red",
-                    alpha=0.6,
-                )
-            )
-    for c in walk.plan_map.obstacles if walk.segments and walk.segments[-1].seen else ():
+            add_rectangle(ax, (o.x, o.y), o.yaw, o.size_x, o.size_y, color="red", alpha=0.6)
+    seen = walk.segments[-1].seen if walk.segments else ()  # a room's detected circles
+    for c in seen:
         ax.add_patch(CirclePatch((c.x, c.y), c.r, fill=False, ls="--", color="red", lw=0.8))
-    spec = walk.spec
+    size = (walk.spec.foot_length, walk.spec.foot_width)
     for k, seg in enumerate(walk.segments):
         w = seg.plan.path.waypoints
         ax.plot(w[:, 0], w[:, 1], "-", color="blue", lw=1.2, label="path" if k == 0 else None)
         f = seg.plan.footsteps
         for p, h in zip(f.positions, f.headings, strict=True):
-            _foot(ax, p, h, spec, color="green", lw=0.9)
+            add_rectangle(ax, p, h, *size, fill=False, color="green", lw=0.9)
         for p, h in zip(
             seg.run.actual_footholds, f.headings[1 : 1 + len(seg.run.actual_footholds)], strict=True
         ):
-            _foot(ax, p, h, spec, color="black", lw=0.7)
+            add_rectangle(ax, p, h, *size, fill=False, color="black", lw=0.7)
         com = np.asarray(seg.run.log.com)
         ax.plot(com[:, 0], com[:, 1], color="grey", lw=0.6, label="COM" if k == 0 else None)
     ax.plot(*walk.plan_map.start, "s", color="blue", ms=8, label="start")

@@ -199,6 +199,11 @@ def rot_z(a: float) -> npt.NDArray[np.float64]:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+def mean_heading(a: float, b: float) -> float:
+    """The heading halfway between two headings [rad]."""
+    return math.atan2(math.sin(a) + math.sin(b), math.cos(a) + math.cos(b))
+
+
 def leg_forward(
     spec: BipedSpec, side: str, q: npt.ArrayLike
 ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:

@@ -114,10 +114,6 @@ def minimum_jerk(tau: npt.ArrayLike) -> npt.NDArray[np.float64]:
     return t**3 * (10.0 - 15.0 * t + 6.0 * t * t)
 
 
-def _wrap(a: npt.ArrayLike) -> npt.NDArray[np.float64]:
-    return np.arctan2(np.sin(a), np.cos(a))
-
-
 def preview_gains(
     com_height: float, dt: float, horizon: int, q_e: float = 1.0, r: float = 1e-6
 ) -> tuple[float, npt.NDArray[np.float64], npt.NDArray[np.float64]]:
@@ -239,7 +235,7 @@ def gait_pattern(
         s = minimum_jerk(tau)
         pos[side][swing] = p0 + s[:, None] * (target - p0)
         progress[side][swing] = s
-        yaw[side][swing] = h0 + s * float(_wrap(h1 - h0))
+        yaw[side][swing] = h0 + s * math.atan2(math.sin(h1 - h0), math.cos(h1 - h0))
         lift[side][swing] = c.step_height * 0.5 * (1.0 - np.cos(2 * math.pi * tau))
         support[swing] = SUPPORT_RIGHT if side == "left" else SUPPORT_LEFT
         zmp[swing] = stance

@@ -19,6 +19,7 @@ import numpy as np
 from footfall.biped.avoidance import Circle
 from footfall.biped.obstacles import DetectionConfig, detect_obstacles
 from footfall.errors import DatasetError
+from footfall.sensing.pose import Pose
 from footfall.sim.biped_sim import BipedSimulation
 from footfall.sim.camera import SimDepthCamera
 
@@ -27,11 +28,11 @@ HIDDEN_DEPTH = 0.3  # [m]
 HIDDEN_SPACING = 0.05  # [m]
 
 
-def cloud_in_world(camera: SimDepthCamera, sim: BipedSimulation) -> np.ndarray:
-    """The camera's current view as points in the world frame, shape (n, 3) [m]."""
+def cloud_in_world(camera: SimDepthCamera, sim: BipedSimulation) -> tuple[np.ndarray, Pose]:
+    """The camera's view: points in the world frame, shape (n, 3) [m], and its pose."""
     depth, pose = camera.capture(sim.data)
     points, _ = camera.intrinsics.depth_to_points(depth)
-    return pose.rotation.apply(points) + pose.position
+    return pose.rotation.apply(points) + pose.position, pose
 
 
 def merge_circles(known: list[Circle], new: list[Circle]) -> list[Circle]:
@@ -59,9 +60,9 @@ def extend_hidden(points: np.ndarray, camera_xy: np.ndarray) -> np.ndarray:
 
 def look(camera: SimDepthCamera, sim: BipedSimulation, known: list[Circle]) -> list[Circle]:
     """Update the remembered obstacle circles with what the camera sees now."""
-    points = cloud_in_world(camera, sim)
+    points, pose = cloud_in_world(camera, sim)
     if len(points):
-        points = extend_hidden(points, camera.pose(sim.data).position[:2])
+        points = extend_hidden(points, pose.position[:2])
     try:
         detection = detect_obstacles(points, frame="map", config=DETECTION)
     except DatasetError:  # nothing but floor, or nothing at all, in view

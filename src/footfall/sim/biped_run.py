@@ -26,7 +26,7 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.biped.avoidance import Circle
-from footfall.biped.body import SIDES, BipedSpec, load_biped_spec
+from footfall.biped.body import SIDES, BipedSpec, load_biped_spec, mean_heading
 from footfall.biped.footsteps import Footsteps, plan_footsteps
 from footfall.biped.gait import GaitConfig, GaitPattern, gait_pattern
 from footfall.biped.lipm import LipmConfig
@@ -36,7 +36,7 @@ from footfall.errors import ConfigError, PlanningError
 from footfall.sim.biped_model import Obstacle, biped_mjcf, camera_mount
 from footfall.sim.biped_room import Room, make_room
 from footfall.sim.biped_sim import BipedSimulation
-from footfall.sim.biped_walk import BipedRun, StabiliserConfig, run_pattern, start_pose
+from footfall.sim.biped_walk import BipedRun, StabiliserConfig, run_pattern, stand
 
 OBSTACLE_HEIGHT = 0.5  # cylinders standing for a map's circles [m]
 CLEARANCE = 0.05  # margin between the body's reach and an obstacle [m]
@@ -157,15 +157,10 @@ def _standing_feet(
     """The feet where they stand, their midpoint and heading."""
     feet = {}
     for side in SIDES:
-        p = sim.sole(side)
-        r = sim.data.site_xmat[sim.model.site(f"{side}_sole").id].reshape(3, 3)
+        p, r = sim.sole(side), sim.sole_rotation(side)
         feet[side] = (float(p[0]), float(p[1]), math.atan2(r[1, 0], r[0, 0]))
     mid = 0.5 * (np.array(feet["left"][:2]) + np.array(feet["right"][:2]))
-    yaw = math.atan2(
-        math.sin(feet["left"][2]) + math.sin(feet["right"][2]),
-        math.cos(feet["left"][2]) + math.cos(feet["right"][2]),
-    )
-    return feet, mid, yaw
+    return feet, mid, mean_heading(feet["left"][2], feet["right"][2])
 
 
 def _ideal_feet(start, heading: float, width: float) -> dict[str, tuple[float, float, float]]:
@@ -173,18 +168,6 @@ def _ideal_feet(start, heading: float, width: float) -> dict[str, tuple[float, f
     s = np.asarray(start, dtype=np.float64)
     left, right = s + 0.5 * width * normal, s - 0.5 * width * normal
     return {"left": (*left, heading), "right": (*right, heading)}
-
-
-def com_height(spec: BipedSpec) -> float:
-    """The COM's height while standing at the walking hip height [m]."""
-    model = mujoco.MjModel.from_xml_string(biped_mjcf(spec))
-    sim = BipedSimulation(spec, model)
-    steps = plan_footsteps(
-        np.array([[0.0, 0.0], [0.1, 0.0]]), PlanMap("x", (0, 0), (1, 0), ()).limits
-    )
-    pattern = gait_pattern(steps, _ideal_feet((0, 0), 0.0, 0.2), 0.6)
-    start_pose(sim, pattern)
-    return float(sim.com()[2])
 
 
 def _gait(spec: BipedSpec, footsteps: Footsteps, feet, z_c: float, lipm: LipmConfig) -> GaitPattern:
@@ -197,19 +180,16 @@ def walk_plan_map(
     plan_map: PlanMap, spec: BipedSpec, stabiliser: StabiliserConfig, name: str
 ) -> BipedWalk:
     """Plan a known map once and walk it."""
-    z_c = com_height(spec)
-    lipm = LipmConfig(com_height=z_c)
     obstacles = _cylinders(plan_map.obstacles)
-    heading = 0.0
-    feet = _ideal_feet(plan_map.start, heading, plan_map.limits.width)
-    model = mujoco.MjModel.from_xml_string(biped_mjcf(spec, obstacles))
-    sim = BipedSimulation(spec, model)
+    feet = _ideal_feet(plan_map.start, 0.0, plan_map.limits.width)
+    sim = BipedSimulation(spec, mujoco.MjModel.from_xml_string(biped_mjcf(spec, obstacles)))
+    z_c = stand(sim, feet)
+    lipm = LipmConfig(com_height=z_c)
     try:
         plan = plan_walk(body_plan_map(plan_map, spec), lipm)
     except PlanningError as exc:
         return BipedWalk(name, plan_map, obstacles, [], False, False, 0, str(exc), spec)
     pattern = _gait(spec, plan.footsteps, feet, z_c, lipm)
-    start_pose(sim, pattern)
     run = run_pattern(sim, pattern, stabiliser)
     reached = not run.fell and _near(sim.com()[:2], plan_map.goal)
     segment = Segment(plan, pattern, run)
@@ -240,16 +220,12 @@ def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWa
     """Look, plan, walk a stretch, repeat: the room seen only through the head camera."""
     from footfall.sim.biped_look import look
 
-    z_c = com_height(spec)
-    lipm = LipmConfig(com_height=z_c)
     mount = camera_mount(spec)
     model = mujoco.MjModel.from_xml_string(biped_mjcf(spec, room.obstacles, mount))
     sim = BipedSimulation(spec, model)
-    base = PlanMap(room.name, room.start, room.goal, ())
-    limits = base.limits
-    feet = _ideal_feet(room.start, 0.0, limits.width)
-    steps = plan_footsteps(np.array([room.start, room.start]), limits)
-    start_pose(sim, _gait(spec, steps, feet, z_c, lipm))
+    limits = PlanMap(room.name, room.start, room.goal, ()).limits
+    z_c = stand(sim, _ideal_feet(room.start, 0.0, limits.width))
+    lipm = LipmConfig(com_height=z_c)
     seen: list[Circle] = []
     segments: list[Segment] = []
     no_route = None

@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from footfall.biped.body import SIDES, leg_inverse, rot_x, rot_y, rot_z
-from footfall.biped.gait import SUPPORT_DOUBLE, SUPPORT_LEFT, GaitPattern
+from footfall.biped.body import SIDES, BipedSpec, leg_inverse, mean_heading, rot_x, rot_y, rot_z
+from footfall.biped.gait import GaitPattern
 from footfall.errors import UnreachableTargetError
 from footfall.sim.biped_sim import BipedSimulation, polygon_margin
 
@@ -32,6 +32,11 @@ CONTROL_PERIOD = 0.004  # [s]
 ANCHOR_FILTER = 0.15
 # After a pose it cannot reach the robot holds its last targets this long [s].
 HOLD_AFTER_STOP = 1.0
+# A foothold is measured this long after its foot is loaded [s].
+FOOTHOLD_SETTLE = 0.1
+# Corrections of the hip position that bring the body's COM over its target; warm-started
+# from the previous tick, two leave it within a tenth of a millimetre.
+COM_ITERATIONS = 2
 
 
 @dataclass(frozen=True)
@@ -63,7 +68,6 @@ class BipedLog:
     zmp: list[npt.NDArray[np.float64]] = field(default_factory=list)
     zmp_ref: list[npt.NDArray[np.float64]] = field(default_factory=list)
     zmp_margin: list[float] = field(default_factory=list)
-    feet: list[npt.NDArray[np.float64]] = field(default_factory=list)
     joints: list[npt.NDArray[np.float64]] = field(default_factory=list)
     targets: list[npt.NDArray[np.float64]] = field(default_factory=list)
     support_polygon: list[npt.NDArray[np.float64] | None] = field(default_factory=list)
@@ -72,12 +76,56 @@ class BipedLog:
         """The rows as arrays."""
         return {
             k: np.asarray(getattr(self, k))
-            for k in ("time", "com", "com_ref", "zmp", "zmp_ref", "zmp_margin", "feet", "joints")
+            for k in ("time", "com", "com_ref", "zmp", "zmp_ref", "zmp_margin", "joints")
         }
 
 
-def _mean_angle(a: float, b: float) -> float:
-    return math.atan2(math.sin(a) + math.sin(b), math.cos(a) + math.cos(b))
+FootPoses = dict[str, tuple[npt.NDArray[np.float64], float]]  # side -> sole [m], heading [rad]
+
+
+def leg_angles(spec: BipedSpec, hip, rotation, feet: FootPoses) -> npt.NDArray[np.float64]:
+    """Both legs' joint angles for level feet at their poses under a hip pose."""
+    return np.concatenate(
+        [
+            leg_inverse(
+                spec, side, rotation.T @ (feet[side][0] - hip), rotation.T @ rot_z(feet[side][1])
+            )
+            for side in SIDES
+        ]
+    )
+
+
+def place_hip(
+    sim: BipedSimulation, com_xy, rotation, feet: FootPoses, hip_xy
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """The hip position (at the walking height) that puts the body's COM over ``com_xy``.
+
+    Starting from ``hip_xy``, the hip moves by the COM's miss, the legs re-solved each time.
+
+    Returns:
+        ``(hip, joints, com)``: hip position [m], joint angles [rad], the COM before the
+        last correction [m].
+    """
+    hip = np.array([*hip_xy, sim.spec.hip_height])
+    com = np.zeros(3)
+    for _ in range(COM_ITERATIONS):
+        com = sim.body_com(hip, rotation, leg_angles(sim.spec, hip, rotation, feet))
+        hip[:2] += np.asarray(com_xy) - com[:2]
+    return hip, leg_angles(sim.spec, hip, rotation, feet), com
+
+
+def stand(sim: BipedSimulation, feet: dict[str, tuple[float, float, float]]) -> float:
+    """Stand the robot still on level feet ``(x, y, heading)``, its COM between them.
+
+    Returns:
+        The COM's height [m], ``z_c`` of the cart-table model.
+    """
+    yaw = mean_heading(feet["left"][2], feet["right"][2])
+    poses = {s: (np.array([f[0], f[1], 0.0]), f[2]) for s, f in feet.items()}
+    mid = 0.5 * (poses["left"][0][:2] + poses["right"][0][:2])
+    hip, joints, com = place_hip(sim, mid, rot_z(yaw), poses, mid)
+    sim.set_pose(hip, yaw, joints)
+    return float(com[2])
 
 
 class GaitController:
@@ -102,30 +150,19 @@ class GaitController:
 
     def pose_at(self, i: int, tilt: tuple[float, float] = (0.0, 0.0)):
         """Hip pose and joint targets for pattern sample ``i`` plus the COM shift."""
-        p, spec = self.pattern, self.sim.spec
-        yaw = _mean_angle(p.foot_yaw["left"][i], p.foot_yaw["right"][i])
+        p = self.pattern
+        yaw = mean_heading(p.foot_yaw["left"][i], p.foot_yaw["right"][i])
         rotation = rot_z(yaw) @ rot_x(tilt[0]) @ rot_y(tilt[1])
         com_target = p.com[i] + self.anchor + self.shift
-        hip = np.array([*(com_target + self._hip_offset), spec.hip_height])
-        for _ in range(2):
-            joints = self.joint_targets(hip, rotation, i)
-            com = self.sim.body_com(hip, rotation, joints)
-            hip[:2] += com_target - com[:2]
-        self._hip_offset = hip[:2] - com_target
-        return hip, rotation, self.joint_targets(hip, rotation, i)
-
-    def joint_targets(self, hip, rotation, i: int) -> npt.NDArray[np.float64]:
-        """Both legs' angles for the feet of sample ``i`` under a hip pose."""
-        p = self.pattern
-        q = []
+        feet = {}
         for side in SIDES:
             off = self.foot_offset[side]
-            foot = p.feet[side][i] + np.array([off[0], off[1], 0.0])
-            r_foot = rot_z(p.foot_yaw[side][i] + off[2])
-            q.append(
-                leg_inverse(self.sim.spec, side, rotation.T @ (foot - hip), rotation.T @ r_foot)
-            )
-        return np.concatenate(q)
+            feet[side] = (p.feet[side][i] + (off[0], off[1], 0.0), p.foot_yaw[side][i] + off[2])
+        hip, joints, _ = place_hip(
+            self.sim, com_target, rotation, feet, com_target + self._hip_offset
+        )
+        self._hip_offset = hip[:2] - com_target
+        return hip, rotation, joints
 
     def track_feet(self, i: int, dt: float) -> None:
         """Follow the feet where they stand, and carry each swing back onto the plan.
@@ -160,11 +197,12 @@ class GaitController:
         a = dt / (ANCHOR_FILTER + dt)
         self.anchor = self.anchor + a * (target - self.anchor)
 
-    def update(self, i: int, dt: float) -> npt.NDArray[np.float64]:
-        """One tick: read the sensors, update the stabiliser, return joint targets."""
+    def update(
+        self, i: int, dt: float, zmp: npt.NDArray[np.float64] | None
+    ) -> npt.NDArray[np.float64]:
+        """One tick: given the measured ZMP (None in the air), return joint targets."""
         c = self.config
         self.track_feet(i, dt)
-        zmp, _ = self.sim.measured_zmp()
         if zmp is not None:
             if self.zmp_filtered is None:
                 self.zmp_filtered = zmp
@@ -194,19 +232,18 @@ class BipedRun:
     stopped: str | None = None
 
 
-def start_pose(sim: BipedSimulation, pattern: GaitPattern) -> None:
-    """Stand the robot on the pattern's first sample, feet on the floor."""
-    controller = GaitController(sim, pattern, StabiliserConfig(0.0, 1.0, 0.0, 0.0))
-    hip, rotation, joints = controller.pose_at(0)
-    yaw = math.atan2(rotation[1, 0], rotation[0, 0])
-    sim.set_pose(hip, yaw, joints)
+def start_pose(sim: BipedSimulation, pattern: GaitPattern) -> float:
+    """Stand the robot on the pattern's first feet; returns the COM height [m]."""
+    return stand(
+        sim,
+        {s: (*pattern.feet[s][0][:2], float(pattern.foot_yaw[s][0])) for s in SIDES},
+    )
 
 
 def run_pattern(
     sim: BipedSimulation,
     pattern: GaitPattern,
     stabiliser: StabiliserConfig | None = None,
-    on_tick=None,
 ) -> BipedRun:
     """Walk a pattern from its standing start; stop early on a fall.
 
@@ -214,7 +251,6 @@ def run_pattern(
         sim: The simulation, its robot placed with :func:`start_pose`.
         pattern: The gait.
         stabiliser: Gains (defaults when None).
-        on_tick: Called with ``(sim, time)`` after each control tick (a camera, a viewer).
     """
     controller = GaitController(sim, pattern, stabiliser)
     log = BipedLog()
@@ -223,14 +259,14 @@ def run_pattern(
     t = 0.0
     landed: list[npt.NDArray[np.float64]] = []
     next_landing = 1
-    settle = 0.5 * (1.0 - 0.0) * 0.2  # sample a foothold a moment after it is loaded
     stopped = None
     joints = sim.data.ctrl.copy()
+    zmp, hull = sim.measured_zmp()
     while t <= pattern.duration:
         i = pattern.index(t)
         if stopped is None:
             try:
-                joints = controller.update(i, CONTROL_PERIOD)
+                joints = controller.update(i, CONTROL_PERIOD, zmp)
             except UnreachableTargetError as exc:
                 # Freeze: hold the last targets and watch whether it stays up.
                 stopped = str(exc)
@@ -247,17 +283,14 @@ def run_pattern(
         log.zmp.append(np.full(2, np.nan) if zmp is None else zmp)
         log.zmp_ref.append(pattern.zmp[i] + controller.anchor)
         log.zmp_margin.append(np.nan if zmp is None else polygon_margin(hull, zmp))
-        log.feet.append(np.concatenate([sim.sole(s)[:2] for s in SIDES]))
         log.joints.append(sim.joints)
         log.targets.append(joints)
         log.support_polygon.append(hull if len(hull) else None)
         while next_landing < len(pattern.landing_time) and t >= (
-            pattern.landing_time[next_landing] + settle
+            pattern.landing_time[next_landing] + FOOTHOLD_SETTLE
         ):
             landed.append(sim.sole(pattern.foothold_sides[next_landing])[:2])
             next_landing += 1
-        if on_tick is not None:
-            on_tick(sim, t)
         if sim.fallen():
             fell = True
             break
@@ -272,9 +305,3 @@ def run_pattern(
         warnings=sim.warnings_seen,
         stopped=stopped,
     )
-
-
-def support_of(pattern: GaitPattern, i: int) -> str:
-    """``"double"``, ``"left"`` or ``"right"`` at sample ``i``."""
-    s = int(pattern.support[i])
-    return "double" if s == SUPPORT_DOUBLE else ("left" if s == SUPPORT_LEFT else "right")
