@@ -30,7 +30,12 @@ def plot_biped_top(walk, path: Path) -> Path:
     size = (walk.spec.foot_length, walk.spec.foot_width)
     for k, seg in enumerate(walk.segments):
         w = seg.plan.path.waypoints
-        ax.plot(w[:, 0], w[:, 1], "-", color="blue", lw=1.2, label="path" if k == 0 else None)
+        if seg.stretch is None:
+            ax.plot(w[:, 0], w[:, 1], "-", color="blue", lw=1.2, label="path" if k == 0 else None)
+        else:  # a room: the stretch walked, and the rest of that look's plan
+            label = "path (dotted: the rest of each look's plan)" if k == 0 else None
+            ax.plot(*seg.stretch.T, "-", color="blue", lw=1.2, label=label)
+            ax.plot(w[:, 0], w[:, 1], ":", color="blue", lw=0.6)
         f = seg.plan.footsteps
         for p, h in zip(f.positions, f.headings, strict=True):
             add_rectangle(ax, p, h, *size, fill=False, color="green", lw=0.9)

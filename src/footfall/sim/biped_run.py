@@ -98,6 +98,7 @@ class Segment:
     pattern: GaitPattern
     run: BipedRun
     seen: tuple[Circle, ...] = ()
+    stretch: npt.NDArray[np.float64] | None = None  # the part of the path walked
 
 
 @dataclass
@@ -249,7 +250,7 @@ def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWa
             plan = replace(full, footsteps=footsteps)
             pattern = _gait(spec, footsteps, feet, z_c, lipm)
             run = run_pattern(sim, pattern, request.stabiliser)
-            segments.append(Segment(plan, pattern, run, tuple(seen)))
+            segments.append(Segment(plan, pattern, run, tuple(seen), stretch))
             if run.fell or run.stopped:
                 break
     finally:
