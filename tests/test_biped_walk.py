@@ -133,3 +133,17 @@ def test_walk_biped_cli_walks_a_dissertation_map(tmp_path, capsys):
     assert m["zmp_margin_min_m"] > 0
     for name in ("top.png", "balance.png", "joints.png"):
         assert (out / name).stat().st_size > 10_000
+
+
+def test_a_look_keeps_all_its_own_circles_and_updates_the_remembered_ones():
+    """Circles of one look that overlap each other (a cluster split in parts) all stay; a
+    larger new circle replaces a remembered one it overlaps; a smaller one is dropped."""
+    from footfall.biped.avoidance import Circle
+    from footfall.sim.biped_look import merge_circles
+
+    big, part = Circle(2.0, -0.7, 0.9), Circle(1.8, 0.0, 0.25)
+    assert set(merge_circles([], [big, part])) == {big, part}
+    remembered = Circle(4.0, 0.0, 0.2)
+    grown = Circle(4.05, 0.0, 0.3)
+    assert merge_circles([remembered], [grown]) == [grown]
+    assert merge_circles([grown], [remembered]) == [grown]

@@ -36,14 +36,21 @@ def cloud_in_world(camera: SimDepthCamera, sim: BipedSimulation) -> tuple[np.nda
 
 
 def merge_circles(known: list[Circle], new: list[Circle]) -> list[Circle]:
-    """Remembered circles plus new ones; overlapping pairs keep the larger circle."""
-    out = list(known)
+    """Remembered circles updated with a new look's.
+
+    Every circle of the new look is kept; a remembered circle goes when a larger new one
+    overlaps it, and a new circle is dropped when a remembered one that overlaps it is at
+    least as large.
+    """
+    kept = list(known)
+    added = []
     for c in new:
-        overlapping = [k for k in out if np.hypot(k.x - c.x, k.y - c.y) < max(k.r, c.r)]
+        overlapping = [k for k in kept if np.hypot(k.x - c.x, k.y - c.y) < max(k.r, c.r)]
         if any(k.r >= c.r for k in overlapping):
             continue
-        out = [k for k in out if k not in overlapping] + [c]
-    return out
+        kept = [k for k in kept if k not in overlapping]
+        added.append(c)
+    return kept + added
 
 
 def extend_hidden(points: np.ndarray, camera_xy: np.ndarray) -> np.ndarray:
