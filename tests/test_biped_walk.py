@@ -147,3 +147,9 @@ def test_a_look_keeps_all_its_own_circles_and_updates_the_remembered_ones():
     grown = Circle(4.05, 0.0, 0.3)
     assert merge_circles([remembered], [grown]) == [grown]
     assert merge_circles([grown], [remembered]) == [grown]
+
+
+def test_walk_biped_kajita_reaches_the_end_of_the_example():
+    m = walk_biped(WalkBipedRequest(kajita=True)).metrics()
+    assert m["reached_goal"] and not m["fell"] and m["footsteps"] == 4
+    assert m["zmp_margin_min_m"] > 0 and m["footstep_error_mean_m"] < 0.02

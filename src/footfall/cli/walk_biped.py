@@ -43,6 +43,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                         help="one of the dissertation's 11 test maps")  # fmt: skip
     source.add_argument("--map", type=Path, help="a JSON map file (see footfall.biped.maps)")
     source.add_argument("--room", type=int, metavar="SEED", help="a random room seen by camera")
+    source.add_argument(
+        "--kajita", action="store_true", help="Kajita's straight example: 0.3 m steps, 4 steps"
+    )
     p.add_argument(
         "--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal instead of the source's [m]"
     )
@@ -63,6 +66,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
             case=args.case,
             map=args.map,
             room=args.room,
+            kajita=args.kajita,
             goal=tuple(args.goal) if args.goal is not None else None,
             spec=args.robot,
         )

@@ -25,11 +25,11 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from footfall.biped.avoidance import Circle
+from footfall.biped.avoidance import AvoidancePath, Circle
 from footfall.biped.body import SIDES, BipedSpec, load_biped_spec, mean_heading
-from footfall.biped.footsteps import Footsteps, plan_footsteps
+from footfall.biped.footsteps import Footsteps, footsteps_from_parameters, plan_footsteps
 from footfall.biped.gait import GaitConfig, GaitPattern, gait_pattern
-from footfall.biped.lipm import LipmConfig
+from footfall.biped.lipm import LipmConfig, WalkParameter, lipm_pattern
 from footfall.biped.maps import FOOT_LENGTH, PlanMap, dissertation_map, load_map
 from footfall.biped.planner import WalkPlan, plan_walk
 from footfall.errors import ConfigError, PlanningError
@@ -51,6 +51,7 @@ class WalkBipedRequest:
         case: One of the dissertation's 11 maps.
         map: A JSON map file.
         room: Seed of a random room seen through the camera.
+        kajita: Kajita's straight textbook walk (s_x 0.3 m, 4 steps) on a bare floor.
         goal: Goal instead of the source's [m].
         spec: Biped spec name or TOML file.
         stabiliser: Stabiliser gains.
@@ -61,6 +62,7 @@ class WalkBipedRequest:
     case: int | None = None
     map: Path | None = None
     room: int | None = None
+    kajita: bool = False
     goal: tuple[float, float] | None = None
     spec: str = "archie"
     stabiliser: StabiliserConfig = field(default_factory=StabiliserConfig)
@@ -68,8 +70,9 @@ class WalkBipedRequest:
     max_looks: int = 16
 
     def __post_init__(self) -> None:
-        if sum(v is not None for v in (self.case, self.map, self.room)) != 1:
-            raise ConfigError("walk-biped needs exactly one of --case, --map and --room")
+        sources = (self.case, self.map, self.room, True if self.kajita else None)
+        if sum(v is not None for v in sources) != 1:
+            raise ConfigError("walk-biped needs exactly one of --case, --map, --room and --kajita")
 
 
 def body_radius(spec: BipedSpec, step_width: float) -> float:
@@ -190,13 +193,42 @@ def walk_plan_map(
         plan = plan_walk(body_plan_map(plan_map, spec), lipm)
     except PlanningError as exc:
         return BipedWalk(name, plan_map, obstacles, [], False, False, 0, str(exc), spec)
-    pattern = _gait(spec, plan.footsteps, feet, z_c, lipm)
+    return _walk(sim, plan, feet, z_c, lipm, stabiliser, name, obstacles)
+
+
+def _walk(sim, plan: WalkPlan, feet, z_c: float, lipm: LipmConfig, stabiliser, name, obstacles):
+    """Walk one plan from standing on ``feet``."""
+    pattern = _gait(sim.spec, plan.footsteps, feet, z_c, lipm)
     run = run_pattern(sim, pattern, stabiliser)
-    reached = not run.fell and _near(sim.com()[:2], plan_map.goal)
+    reached = not run.fell and _near(sim.com()[:2], plan.map.goal)
     segment = Segment(plan, pattern, run)
     return BipedWalk(
-        name, plan_map, obstacles, [segment], reached, run.fell, run.collisions, None, spec
+        name, plan.map, obstacles, [segment], reached, run.fell, run.collisions, None, sim.spec
     )
+
+
+KAJITA_STEPS = (0.0, 0.3, 0.3, 0.3, 0.0)  # s_x of the textbook example [m], s_y 0.2 m
+
+
+def walk_kajita(spec: BipedSpec, stabiliser: StabiliserConfig) -> BipedWalk:
+    """Kajita's example (the dissertation's Fig. 29): 0.3 m steps, 0.2 m apart, T_sup 0.8 s.
+
+    The walk parameters go straight to the footsteps (eqs. 96-98), with the LIPM pattern
+    over them kept in the plan as ``footfall plan`` computes it.
+    """
+    params = [WalkParameter(sx, 0.2) for sx in KAJITA_STEPS]
+    footsteps = footsteps_from_parameters(params, (0.0, 0.0), first_step_left=False)
+    feet = _ideal_feet((0.0, 0.0), 0.0, 0.2)
+    sim = BipedSimulation(spec, mujoco.MjModel.from_xml_string(biped_mjcf(spec)))
+    z_c = stand(sim, feet)
+    lipm = LipmConfig(com_height=z_c)
+    support = footsteps.positions.copy()
+    support[0] = (0.0, 0.0)
+    pattern = lipm_pattern(params, lipm, footsteps=support, first_step_left=False)
+    goal = (float(sum(KAJITA_STEPS)), 0.0)
+    path = AvoidancePath(np.array([(0.0, 0.0), goal]), goal[0], 0)
+    plan = WalkPlan(PlanMap("kajita", (0.0, 0.0), goal, ()), path, footsteps, pattern, 0.0, 0)
+    return _walk(sim, plan, feet, z_c, lipm, stabiliser, "kajita", ())
 
 
 def _near(point, goal) -> bool:
@@ -266,6 +298,8 @@ def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWa
 def walk_biped(request: WalkBipedRequest) -> BipedWalk:
     """Run the walk a request asks for."""
     spec = load_biped_spec(request.spec)
+    if request.kajita:
+        return walk_kajita(spec, request.stabiliser)
     if request.room is not None:
         room = make_room(request.room)
         if request.goal is not None:
