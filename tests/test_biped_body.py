@@ -126,3 +126,12 @@ def test_the_gait_com_makes_the_planned_zmp_through_the_cart_table():
         np.testing.assert_allclose(landed[:2], g.footholds[n], atol=1e-9)
         assert landed[2] == 0.0
     assert np.max(g.feet["left"][:, 2]) == pytest.approx(0.05, abs=1e-3)
+
+
+def test_a_spec_that_is_not_text_or_not_there_is_refused(tmp_path):
+    binary = tmp_path / "archie.toml"
+    binary.write_bytes(b"\xff\xfe\x00name")
+    with pytest.raises(ConfigError, match="not UTF-8"):
+        load_biped_spec(binary)
+    with pytest.raises(ConfigError, match="neither a built-in robot"):
+        load_biped_spec(tmp_path / "missing.toml")

@@ -20,18 +20,18 @@ The dissertation's relations (§4.4, eqs. 41-54) are the special cases of
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import ConfigError, UnreachableTargetError
+from footfall.robots import read_description
 
 JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ankle_pitch", "ankle_roll")
 SIDES = ("left", "right")
+BUILTIN_BIPEDS = ("archie",)
 
 
 @dataclass(frozen=True)
@@ -127,20 +127,7 @@ def load_biped_spec(name_or_path: str | Path = "archie") -> BipedSpec:
     Raises:
         ConfigError: When the file is missing, not TOML, or lacks a key (named).
     """
-    path = Path(name_or_path)
-    if path.suffix == ".toml":
-        if not path.is_file():
-            raise ConfigError(f"biped spec {path} does not exist")
-        text = path.read_text(encoding="utf-8")
-    else:
-        try:
-            text = resources.files("footfall.robots").joinpath(f"{name_or_path}.toml").read_text()
-        except FileNotFoundError as exc:
-            raise ConfigError(f"no built-in biped named {name_or_path!r}") from exc
-    try:
-        d = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"biped spec {name_or_path} is not TOML: {exc}") from exc
+    d = read_description(name_or_path, BUILTIN_BIPEDS)
     try:
         leg, body, foot, servo, stance, cam = (
             d[k] for k in ("leg", "body", "foot", "servo", "stance", "camera")
@@ -150,7 +137,7 @@ def load_biped_spec(name_or_path: str | Path = "archie") -> BipedSpec:
         if missing:
             raise ConfigError(f"biped spec lacks joint limits for {', '.join(sorted(missing))}")
         return BipedSpec(
-            name=str(d.get("name", path.stem)),
+            name=str(d.get("name", Path(name_or_path).stem)),
             ankle_height=float(leg["ankle_height"]),
             ankle_link=float(leg["ankle_link"]),
             shank=float(leg["shank"]),

@@ -10,15 +10,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import ConfigError
+from footfall.robots import read_description
 
 NUM_LEGS = 6
 BUILTIN_ROBOTS = ("default", "phantomx")
@@ -281,22 +280,5 @@ def load_spec(name_or_path: str | Path) -> HexapodSpec:
     Raises:
         ConfigError: When the name is unknown, the file is missing or malformed.
     """
-    text: str
-    if str(name_or_path) in BUILTIN_ROBOTS:
-        text = resources.files("footfall.robots").joinpath(f"{name_or_path}.toml").read_text()
-    else:
-        path = Path(name_or_path)
-        if not path.is_file():
-            raise ConfigError(
-                f"robot {str(name_or_path)!r} is neither a built-in robot "
-                f"({', '.join(BUILTIN_ROBOTS)}) nor an existing TOML file"
-            )
-        try:
-            text = path.read_text(encoding="utf-8")
-        except UnicodeDecodeError as exc:
-            raise ConfigError(f"robot description {path} is not UTF-8 text: {exc}") from exc
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"robot description {name_or_path}: {exc}") from exc
+    data = read_description(name_or_path, BUILTIN_ROBOTS)
     return spec_from_dict(data)
