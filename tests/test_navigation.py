@@ -285,17 +285,38 @@ def test_a_wall_stays_remembered_until_its_cells_are_seen_flat():
     """A face that a later frame leaves only its foot as height is still a wall (the
     navigator remembers it); once the cells are seen flat it is forgotten."""
     from footfall.nodes.navigation import WallMemory
+    from footfall.planning.traversability import wall_faces
 
     x, _ = _grid_xy()
     wall = np.where(np.abs(x - 0.5) <= 0.03, 0.3, 0.0)
     memory = WallMemory()
-    memory.update(cost_grid(_update(wall), TraversabilityConfig(), SPAN))
+    memory.note(_update(wall), wall_faces(_update(wall), TraversabilityConfig()))
     assert len(memory) > 0
     foot = _update(np.zeros_like(x))
     foot = MapUpdate(**{**foot.__dict__, "spread": np.where(np.abs(x - 0.5) <= 0.03, 0.25, 0.0)})
     held = cost_grid(foot, TraversabilityConfig(), SPAN, memory.window(foot))
     assert held.lethal[np.abs(x - 0.5) < 0.1].all()
-    memory.update(held)
+    memory.forget_flat(held)
     seen_flat = _update(np.zeros_like(x), sequence=3)
-    memory.update(cost_grid(seen_flat, TraversabilityConfig(), SPAN, memory.window(seen_flat)))
+    memory.forget_flat(cost_grid(seen_flat, TraversabilityConfig(), SPAN, memory.window(seen_flat)))
     assert len(memory) == 0
+
+
+def test_the_navigator_keeps_a_wall_seen_only_between_its_replans():
+    """A map update that shows a wall's face, then one whose grazing view leaves only the
+    face's foot (and its spread): the replan on the second still finds the wall lethal,
+    though the navigator never planned on the first."""
+    x, _ = _grid_xy()
+    band = np.abs(x - 0.5) <= 0.03
+    bus = InProcessBus()
+    navigator = NavigatorNode(bus, SPEC, (2.0, 0.0), NavigationConfig())
+    bus.publish(MapUpdate.TOPIC, _update(np.where(band, 0.3, 0.0), sequence=1))
+    foot = _update(np.zeros_like(x), sequence=2)
+    bus.publish(
+        MapUpdate.TOPIC, MapUpdate(**{**foot.__dict__, "spread": np.where(band, 0.25, 0.0)})
+    )
+    pose = PlanarPose(0.0, 0.0, 0.0)
+    navigator.command(0.0, _status(0.0, pose), WalkCommand(speed=0.1))
+    assert navigator.replans == 1 and navigator.grid is not None
+    assert navigator.grid.lethal[np.abs(x - 0.5) < 0.1].all()
+    navigator.close()

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import statistics
+import threading
 import time
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -35,7 +36,7 @@ from footfall.planning.navigation import (
     follow_route,
     plan_route,
 )
-from footfall.planning.traversability import CostGrid, cost_grid, span_radius
+from footfall.planning.traversability import CostGrid, cost_grid, span_radius, wall_faces
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus
@@ -64,14 +65,18 @@ class PlanOutcome:
 
 
 class WallMemory:
-    """Wall tops found on earlier map updates, in world cells, until seen flat.
+    """Wall tops found on map updates, in world cells, until seen flat.
 
     Cells are indexed on the world grid of the map's resolution (``floor(x / res)``), so a
-    rolling window finds its own cells again.
+    rolling window finds its own cells again. Every map update adds its wall tops (a face
+    shows its height only in the frames that see it well: a later, grazing view may leave
+    its cell only the face's foot); a replan forgets the cells its grid shows flat. The
+    map thread notes while a replan thread reads, hence the lock.
     """
 
     def __init__(self) -> None:
         self._tops: dict[tuple[int, int], float] = {}
+        self._lock = threading.Lock()
 
     def __len__(self) -> int:
         return len(self._tops)
@@ -85,19 +90,31 @@ class WallMemory:
         n, m = np.shape(update.heights)
         out = np.full((n, m), np.nan)
         i0, j0 = self._offset(update.origin, update.resolution)
-        for (gi, gj), top in self._tops.items():
+        with self._lock:
+            tops = list(self._tops.items())
+        for (gi, gj), top in tops:
             i, j = gi - i0, gj - j0
             if 0 <= i < n and 0 <= j < m:
                 out[i, j] = top
         return out
 
-    def update(self, grid: CostGrid) -> None:
-        """Remember the grid's walls and forget those its cells now show flat."""
+    def note(self, update: MapUpdate, wall: npt.NDArray[np.bool_]) -> None:
+        """Remember the wall tops of a map update (the highest seen per cell)."""
+        i0, j0 = self._offset(update.origin, update.resolution)
+        heights = np.asarray(update.heights, dtype=np.float64)
+        with self._lock:
+            for i, j in zip(*np.nonzero(wall), strict=True):
+                key = (int(i) + i0, int(j) + j0)
+                top = float(heights[i, j])
+                if top > self._tops.get(key, -math.inf):
+                    self._tops[key] = top
+
+    def forget_flat(self, grid: CostGrid) -> None:
+        """Forget the walls on cells the grid shows flat."""
         i0, j0 = self._offset(grid.origin, grid.resolution)
-        for i, j in zip(*np.nonzero(grid.flat), strict=True):
-            self._tops.pop((int(i) + i0, int(j) + j0), None)
-        for i, j in zip(*np.nonzero(grid.wall), strict=True):
-            self._tops[(int(i) + i0, int(j) + j0)] = float(grid.wall_top[i, j])
+        with self._lock:
+            for i, j in zip(*np.nonzero(grid.flat), strict=True):
+                self._tops.pop((int(i) + i0, int(j) + j0), None)
 
 
 class NavigatorNode:
@@ -149,6 +166,7 @@ class NavigatorNode:
 
     def _on_map(self, message: MapUpdate) -> None:
         self._map = message
+        self._walls.note(message, wall_faces(message, self.config.traversability))
 
     def set_goal(self, goal_in_world: tuple[float, float] | None) -> None:
         """Walk to a new goal (None: stop navigating); the route is planned afresh."""
@@ -172,7 +190,10 @@ class NavigatorNode:
         self, update: MapUpdate, pose: PlanarPose, goal: tuple[float, float], t: float
     ) -> PlanOutcome:
         t0 = time.perf_counter()
-        grid = cost_grid(update, self.config.traversability, self.span_radius_m)
+        grid = cost_grid(
+            update, self.config.traversability, self.span_radius_m, self._walls.window(update)
+        )
+        self._walls.forget_flat(grid)
         t1 = time.perf_counter()
         blocked = tuple((x, y, r) for x, y, r, until in self._blocked if until > t)
         result = plan_route(grid, (pose.x, pose.y), goal, self.config, blocked, self.route)

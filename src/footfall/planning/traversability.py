@@ -172,6 +172,15 @@ def _box_mean(
     return ndimage.uniform_filter(a, size=2 * half_cells + 1, mode="constant", cval=outside)
 
 
+def wall_faces(update: MapUpdate, config: TraversabilityConfig) -> npt.NDArray[np.bool_]:
+    """Cells more than ``max_rise_m`` above a known cell within ``wall_run_m``: wall tops."""
+    heights = np.asarray(update.heights, dtype=np.float64)
+    known = np.asarray(update.known, dtype=bool) & np.isfinite(heights)
+    run = max(1, round(config.wall_run_m / update.resolution))
+    low = ndimage.minimum_filter(np.where(known, heights, np.inf), size=2 * run + 1, mode="nearest")
+    return known & (heights - low > config.max_rise_m)
+
+
 def cost_grid(
     update: MapUpdate,
     config: TraversabilityConfig,
@@ -197,10 +206,7 @@ def cost_grid(
     def cells(length_m: float) -> int:
         return max(1, round(length_m / res))
 
-    low = ndimage.minimum_filter(
-        np.where(known, heights, np.inf), size=2 * cells(config.wall_run_m) + 1, mode="nearest"
-    )
-    wall = known & (heights - low > config.max_rise_m)
+    wall = wall_faces(update, config)
     top = heights
     # Seen flat: no rise beside it, and its points never spanned a face's height.
     flat = known & ~wall
