@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.sparse import lil_matrix
 from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
@@ -140,6 +140,7 @@ def test_unknown_ground_is_passable_but_dearer_than_seen_ground():
 
 
 @given(st.integers(0, 2**32 - 1), st.integers(1, 6))
+@example(seed=3628800, boxes=4)  # a shortcut that clipped a lethal cell's corner
 @settings(max_examples=25, deadline=None)
 def test_a_route_never_enters_a_lethal_cell(seed, boxes):
     """Among random tall blocks, every point along the route (sampled finely) lies on a
@@ -320,3 +321,18 @@ def test_the_navigator_keeps_a_wall_seen_only_between_its_replans():
     assert navigator.replans == 1 and navigator.grid is not None
     assert navigator.grid.lethal[np.abs(x - 0.5) < 0.1].all()
     navigator.close()
+
+
+@given(st.tuples(*[st.floats(-0.9, 1.9) for _ in range(4)]))
+@settings(max_examples=200, deadline=None)
+def test_a_segment_visits_every_cell_it_crosses(coords):
+    """Each cell a straight segment passes through (found by sampling it densely) is one
+    of the cells the line-of-sight check looks at, corners clipped included."""
+    from footfall.planning.navigation import _segment_cells
+
+    x, _ = _grid_xy()
+    grid = cost_grid(_update(np.zeros_like(x)), TraversabilityConfig(), SPAN)
+    a, b = np.array(coords[:2]), np.array(coords[2:])
+    visited = {grid.cell_of(p) for p in _segment_cells(grid, a, b)}
+    dense = a + np.linspace(0.0, 1.0, 5001)[:, None] * (b - a)
+    assert {grid.cell_of(p) for p in dense} <= visited

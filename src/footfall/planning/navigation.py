@@ -212,8 +212,9 @@ def plan_route(
         cells.append((flat // m, flat % m))
         flat = int(parent[flat // m, flat % m])
     cells.reverse()
-    points = taut(cost, grid, grid.centres_in_world(np.array(cells)))
-    points[0] = start
+    centres = grid.centres_in_world(np.array(cells))
+    centres[0] = start  # pulled straight from where the robot is, not its cell's centre
+    points = taut(cost, grid, centres)
     if not goal_on_map:
         points = np.vstack([points, goal[None, :]])
     return Route(points, float(candidates.flat[end_flat]), goal_on_map)
@@ -243,6 +244,28 @@ def _cost_at(
     out = np.full(len(xy), outside)
     out[on] = cost[ij[on, 0], ij[on, 1]]
     return out
+
+
+def _segment_cells(
+    grid: CostGrid, a: npt.NDArray[np.float64], b: npt.NDArray[np.float64]
+) -> npt.NDArray[np.float64]:
+    """One point inside every cell the segment ``a``-``b`` passes through [m].
+
+    The segment is cut where it crosses a grid line; the middle of each piece lies in the
+    cell that piece crosses, so no cell it clips at a corner is missed (as samples at a
+    fixed spacing can). The ends are included, for an end on a cell's edge.
+    """
+    res, origin = grid.resolution, np.asarray(grid.origin)
+    u, v = (a - origin) / res, (b - origin) / res
+    cuts = [np.array([0.0, 1.0])]
+    for k in range(2):
+        if abs(v[k] - u[k]) > 1e-12:
+            lo, hi = sorted((u[k], v[k]))
+            lines = np.arange(math.floor(lo) + 1, math.ceil(hi))
+            cuts.append((lines - u[k]) / (v[k] - u[k]))
+    t = np.unique(np.clip(np.concatenate(cuts), 0.0, 1.0))
+    t = np.concatenate([[0.0], 0.5 * (t[:-1] + t[1:]), [1.0]])
+    return a + t[:, None] * (b - a)
 
 
 def _near_polyline(
@@ -278,8 +301,7 @@ def taut(
         best = i + 1
         for j in range(i + 2, len(points)):
             worst = float(np.max(along[i : j + 1]))
-            xy, _ = _samples(points[[i, j]], 0.5 * grid.resolution)
-            line = _cost_at(cost, grid, xy, np.inf)
+            line = _cost_at(cost, grid, _segment_cells(grid, points[i], points[j]), np.inf)
             if not (np.all(np.isfinite(line)) and float(np.max(line)) <= worst + 1e-9):
                 break
             best = j
