@@ -325,6 +325,7 @@ def test_the_navigator_keeps_a_wall_seen_only_between_its_replans():
 
 @given(st.tuples(*[st.floats(-0.9, 1.9) for _ in range(4)]))
 @settings(max_examples=200, deadline=None)
+@example(coords=(0.0, 0.0, 1.0, 0.5))
 def test_a_segment_visits_every_cell_it_crosses(coords):
     """Each cell a straight segment passes through (found by sampling it densely) is one
     of the cells the line-of-sight check looks at, corners clipped included."""
@@ -335,4 +336,7 @@ def test_a_segment_visits_every_cell_it_crosses(coords):
     a, b = np.array(coords[:2]), np.array(coords[2:])
     visited = {grid.cell_of(p) for p in _segment_cells(grid, a, b)}
     dense = a + np.linspace(0.0, 1.0, 5001)[:, None] * (b - a)
-    assert {grid.cell_of(p) for p in dense} <= visited
+    # A sample on a grid line (to rounding) touches a cell only at its edge or corner.
+    in_cells = (dense - np.asarray(grid.origin)) / grid.resolution
+    off_lines = np.all(np.abs(in_cells - np.round(in_cells)) > 1e-6, axis=1)
+    assert {grid.cell_of(p) for p in dense[off_lines]} <= visited
