@@ -121,6 +121,51 @@ def test_points_outside_the_map_are_counted():
     assert m.known.sum() == 1
 
 
+@given(
+    st.lists(
+        st.tuples(st.floats(-0.79, 0.79), st.floats(-0.79, 0.79), st.floats(-0.1, 0.1)),
+        min_size=1,
+        max_size=40,
+    ),
+    st.integers(1, 3),
+)
+@settings(max_examples=100, deadline=None)
+def test_a_cell_records_the_parts_its_points_fall_in(points, frames):
+    """Over several frames, each cell's parts are exactly the 4 x 4 parts its points fell in
+    (found with plain floor arithmetic) and its point count is theirs, over the frames seen
+    from a new place only."""
+    from footfall.mapping.kernels import SUB
+
+    m = HeightMap(HeightMapConfig(size=16, resolution=0.1))
+    p = np.array(points)
+    for k in range(frames):
+        for _ in range(2):  # the same view twice: the second adds no points
+            m.integrate_points(p, [0.0, 0.01 * k, 1.0])
+    snapshot = m.snapshot()
+    in_cells = p[:, :2] * (1.0 / 0.1)
+    cell = np.floor(in_cells)
+    part = np.clip(np.floor((in_cells - cell) * SUB), 0, SUB - 1).astype(int)
+    corner = np.round(np.asarray(snapshot.origin) / 0.1).astype(int)
+    expected_parts = np.zeros(snapshot.heights.shape, dtype=np.int64)
+    expected_points = np.zeros(snapshot.heights.shape, dtype=np.int64)
+    for (i, j), (a, b) in zip(cell.astype(int) - corner, part, strict=True):
+        expected_parts[i, j] |= 1 << (SUB * a + b)
+        expected_points[i, j] += frames
+    np.testing.assert_array_equal(snapshot.parts, expected_parts)
+    np.testing.assert_array_equal(snapshot.points, expected_points)
+
+
+def test_a_cell_that_scrolls_out_forgets_its_parts():
+    """A cell erased by the window's move starts its parts and count afresh when seen again."""
+    m = HeightMap(HeightMapConfig(size=16, resolution=0.1))
+    m.integrate_points([[0.01, 0.01, 0.0], [0.09, 0.09, 0.0]], [0.0, 0.0, 1.0])
+    m.recentre((5.0, 0.0))
+    m.recentre((0.0, 0.0))
+    m.integrate_points([[0.01, 0.01, 0.0]], [0.0, 0.0, 1.0])
+    i, j = m.snapshot().cell_of([0.01, 0.01])
+    assert m.snapshot().parts[i, j] == 1 and m.snapshot().points[i, j] == 1
+
+
 def test_within_a_frame_the_highest_point_wins():
     """Several points in one cell in one frame: the cell takes the highest."""
     m = HeightMap(HeightMapConfig(size=16, resolution=0.1))

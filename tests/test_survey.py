@@ -7,12 +7,13 @@ import pytest
 
 from footfall.mapping.height_map import HeightMap
 from footfall.robot.spec import load_spec
-from footfall.scoring.walkability import ScoreConfig
+from footfall.scoring.walkability import ScoreConfig, score_map
 from footfall.sim.camera import SimDepthCamera
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import CameraMount
 from footfall.sim.survey import MappingSettings, simulate_mapping, vertical_edge_cells
 from footfall.sim.terrain import make_terrain
+from footfall.sim.truth import TrueScores
 
 SPEC = load_spec("default")
 SMALL_CAMERA = CameraMount(width=320, height=240)
@@ -102,6 +103,26 @@ def test_course_scores_follow_the_true_geometry(course_map):
     box_walls = walls & known & (np.abs(xs - 0.9) < 0.16) & (np.abs(ys - 0.46) < 0.16)
     assert box_walls.sum() > 10 and not scores.valid[box_walls].any()
     assert rim.sum() > 10 and not scores.valid[rim].any()
+
+
+def test_one_centimetre_grooves_hidden_at_grazing_angles_score_invalid():
+    """Cobblestones with 1 cm grooves, mapped walking over them: along the path no cell the
+    true terrain rules out scores valid, though without the shadow rule some do (the
+    grooves hide behind their near edges from the camera)."""
+    terrain = make_terrain("cobblestones", 1, groove=0.01)
+    settings = MappingSettings(terrain="cobblestones", seconds=12.0, camera=SMALL_CAMERA)
+    result = simulate_mapping(SPEC, settings, terrain=terrain)
+    snapshot = result.snapshot
+    x0, y0 = snapshot.origin
+    side = snapshot.size * snapshot.resolution
+    truth = TrueScores(terrain, snapshot.resolution, settings.score, (x0, x0 + side, y0, y0 + side))
+    xs, ys = snapshot.centres()
+    path = (np.abs(ys) < 0.3) & (xs > 0.6) & (xs < result.path_xy[-1, 0] + 0.1)
+    assert (truth.valid & path).sum() > 500
+    assert not (result.scores.valid & path & ~truth.valid).any()
+    assert (result.scores.valid & path).sum() > 0.6 * (truth.valid & path).sum()
+    unshadowed = score_map(snapshot, ScoreConfig(shadow_points=10**9)).valid
+    assert (unshadowed & path & ~truth.valid).any()
 
 
 def test_slam_noise_degrades_but_does_not_break_the_map():

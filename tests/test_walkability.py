@@ -14,6 +14,7 @@ from footfall.scoring.walkability import (
     edge_cells,
     score_heights,
     score_map,
+    shadowed_cells,
 )
 from footfall.sim.terrain import Course
 
@@ -151,3 +152,26 @@ def test_an_edge_cell_and_its_neighbours_are_invalid_and_scored_at_the_top():
     _, _, plain, _ = score_heights(heights, 0.02, CONFIG)
     assert scores.score[15, 13] > plain[15, 13] + 0.1
     assert scores.valid[15, 5] and scores.valid[15, 25]
+
+
+def test_a_well_seen_cell_with_a_part_never_hit_is_shadowed_with_the_neighbour_behind():
+    """A cell whose low-x row of parts no point ever hit, after many points: it and its
+    neighbour across that side are invalid; the same cell seen by few points, or seen
+    everywhere, is not judged so; a single missing corner part does not reach across."""
+    config = ScoreConfig()
+    n = 9
+    parts = np.full((n, n), 0xFFFF, dtype=np.uint16)
+    points = np.full((n, n), 5 * config.shadow_points)
+    parts[4, 4] = 0xFFFF & ~0x000F  # parts a = 0, the cell's low-x side
+    parts[2, 2] = 0xFFFF & ~0x0001  # one corner part
+    shadow = shadowed_cells(parts, points, config)
+    assert set(zip(*np.nonzero(shadow), strict=True)) == {(4, 4), (3, 4), (2, 2)}
+    sparse = points.copy()
+    sparse[4, 4] = sparse[2, 2] = config.shadow_points - 1
+    assert not shadowed_cells(parts, sparse, config).any()
+    flat = np.zeros((n, n))
+    snapshot = MapSnapshot(
+        flat, np.ones((n, n), bool), (0.0, 0.0), 0.02, np.zeros((n, n)), parts=parts, points=points
+    )
+    valid = score_map(snapshot).valid
+    assert not valid[4, 4] and not valid[3, 4] and valid[5, 4]

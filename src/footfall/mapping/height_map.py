@@ -21,7 +21,10 @@ would be the top of the noise). Across frames:
 
 Each cell also keeps the largest height range of its points within one frame beyond what
 the camera's noise explains (``noise_spread_sigmas`` standard deviations): a cell that
-straddles an edge shows it, a noisy flat floor does not.
+straddles an edge shows it, a noisy flat floor does not. And it keeps which quarters-of-a-
+quarter (4 x 4 parts) of it any point has fallen in, and how many points: a groove too
+narrow for the grid, seen at a grazing angle, hides in the shadow of its near edge, and
+the part of the cell it crosses is never hit however often the rest is.
 
 With drift compensation on (``HeightMapConfig.drift``), each frame is first registered in
 height against the map (:mod:`footfall.mapping.drift`). The buffer, its window arithmetic
@@ -39,6 +42,7 @@ from enum import StrEnum
 
 import numpy as np
 import numpy.typing as npt
+from scipy.spatial.transform import Rotation
 
 from footfall.errors import ConfigError
 from footfall.mapping import kernels
@@ -67,6 +71,16 @@ _RULE_CODES = {
 MAX_COORDINATE = 1e7
 # A cell's height difference counts at most this much in a frame's misfit [m].
 MISFIT_CAP_M = 0.05
+# A frame's points count towards their cells' ``points`` (the evidence that a never-hit
+# part lies in a shadow) only from a new viewpoint: the camera moved this far [m] or turned
+# this much [rad] since the last frame that counted. A camera standing still puts its rays
+# on the same spots every frame, and its sparse rows miss the same parts.
+NEW_VIEW_M = 0.005
+NEW_VIEW_RAD = 0.005
+# Nor from a sensor whose noise at the cell exceeds this share of a part's side: its points
+# scatter over the parts, and quantized depth lays them on stripes with never-hit parts
+# between them.
+EVIDENCE_NOISE_SHARE = 0.2
 
 
 @dataclass(frozen=True)
@@ -150,6 +164,11 @@ class MapSnapshot:
             its height looks flat.
         variance: Variance of each cell's height, shape (N, N) [m^2]; NaN where unknown
             (the fused estimate's for ``variance`` fusion, else the last reading's).
+        parts: Which of each cell's ``SUB`` x ``SUB`` parts (``mapping.kernels.SUB``) a
+            point has fallen in since the cell became known, bit ``SUB * a + b`` for part
+            ``a`` along x and ``b`` along y, shape (N, N); 0 where unknown. A part the
+            camera never hits while the rest of the cell is well seen lies in a shadow.
+        points: Points that have fallen in each cell since it became known, shape (N, N).
         origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
         resolution: Cell side [m].
     """
@@ -160,6 +179,8 @@ class MapSnapshot:
     resolution: float
     spread: npt.NDArray[np.float64] | None = None
     variance: npt.NDArray[np.float64] | None = None
+    parts: npt.NDArray[np.uint16] | None = None
+    points: npt.NDArray[np.int64] | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.resolution) and self.resolution > 0):
@@ -210,14 +231,18 @@ class HeightMap:
         self.variance = np.zeros((n, n), dtype=np.float64)
         self.known = np.zeros((n, n), dtype=bool)
         self.spread = np.zeros((n, n), dtype=np.float64)
+        self.parts = np.zeros((n, n), dtype=np.uint16)
+        self.points = np.zeros((n, n), dtype=np.int64)
         self._frame_h = np.zeros((n, n), dtype=np.float64)
         self._frame_lo = np.zeros((n, n), dtype=np.float64)
         self._frame_r2 = np.zeros((n, n), dtype=np.float64)
         self._frame_sum = np.zeros((n, n), dtype=np.float64)
         self._frame_n = np.zeros((n, n), dtype=np.int64)
+        self._frame_parts = np.zeros((n, n), dtype=np.uint16)
         self._stamp = np.zeros((n, n), dtype=np.int64)
         self._touched = np.zeros(n * n, dtype=np.int64)
         self._frame_id = 0
+        self._last_view: tuple[npt.NDArray[np.float64], Rotation | None] | None = None
         self.origin = self._origin_for(centre)
         self.drift = DriftCompensator(self.config.drift)
 
@@ -295,7 +320,23 @@ class HeightMap:
         self._frame_id += 1
         return self._frame_id
 
-    def _fuse(self, n_touched: int, noise: DepthNoiseModel = IDEAL) -> None:
+    def _new_view(self, sensor_position: npt.ArrayLike, rotation: Rotation | None) -> bool:
+        """Whether a frame from here counts as a new view (``NEW_VIEW_M``, ``NEW_VIEW_RAD``)."""
+        position = np.asarray(sensor_position, dtype=np.float64)
+        last = self._last_view
+        if last is not None:
+            moved = float(np.linalg.norm(position - last[0])) >= NEW_VIEW_M
+            turned = (
+                rotation is not None
+                and last[1] is not None
+                and (rotation * last[1].inv()).magnitude() >= NEW_VIEW_RAD
+            )
+            if not (moved or turned):
+                return False
+        self._last_view = (position, rotation)
+        return True
+
+    def _fuse(self, n_touched: int, noise: DepthNoiseModel = IDEAL, new_view: bool = True) -> None:
         c = self.config
         kernels.fuse(
             self._touched,
@@ -305,10 +346,15 @@ class HeightMap:
             self._frame_r2,
             self._frame_sum,
             self._frame_n,
+            self._frame_parts,
             self.heights,
             self.spread,
             self.variance,
             self.known,
+            self.parts,
+            self.points,
+            new_view,
+            EVIDENCE_NOISE_SHARE * c.resolution / kernels.SUB,
             _RULE_CODES[c.fusion],
             c.range_noise,
             c.process_noise,
@@ -351,7 +397,11 @@ class HeightMap:
                     vertical_offset_m=registration.measured_m,
                     inconsistent=True,
                 )
-        self._fuse(n_touched, camera.noise)
+        self._fuse(
+            n_touched,
+            camera.noise,
+            self._new_view(camera_pose.position, camera_pose.rotation),
+        )
         stats = self._stats(counts, n_touched)
         if registration is None:
             return stats
@@ -391,6 +441,7 @@ class HeightMap:
                 self._frame_r2,
                 self._frame_sum,
                 self._frame_n,
+                self._frame_parts,
                 not camera.noise.is_ideal,
                 self._stamp,
                 self._next_frame(),
@@ -485,12 +536,13 @@ class HeightMap:
             self._frame_r2,
             self._frame_sum,
             self._frame_n,
+            self._frame_parts,
             self._stamp,
             self._next_frame(),
             self._touched,
             counts,
         )
-        self._fuse(n_touched)
+        self._fuse(n_touched, new_view=self._new_view(sensor_position, None))
         return self._stats(counts, n_touched)
 
     @staticmethod
@@ -516,6 +568,8 @@ class HeightMap:
         heights = np.where(known, np.roll(self.heights, shift, axis=(0, 1)), np.nan)
         spread = np.where(known, np.roll(self.spread, shift, axis=(0, 1)), np.nan)
         variance = np.where(known, np.roll(self.variance, shift, axis=(0, 1)), np.nan)
+        parts = np.where(known, np.roll(self.parts, shift, axis=(0, 1)), 0).astype(np.uint16)
+        points = np.where(known, np.roll(self.points, shift, axis=(0, 1)), 0)
         origin = (
             float(self.origin[0] * self.config.resolution),
             float(self.origin[1] * self.config.resolution),
@@ -527,4 +581,6 @@ class HeightMap:
             resolution=self.config.resolution,
             spread=spread,
             variance=variance,
+            parts=parts,
+            points=points,
         )

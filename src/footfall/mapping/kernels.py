@@ -19,6 +19,10 @@ N_COUNTS = 6
 # Points of one cell in one frame whose noise counts as independent (a 3 x 3 patch).
 MAX_INDEPENDENT_POINTS = 9
 
+# Each cell records which of its SUB x SUB parts a point has fallen in, one bit per part
+# (bit ``SUB * a + b`` for part ``a`` along x and ``b`` along y).
+SUB = 4
+
 # Fusion rules, as integers for the compiled code.
 FUSE_LATEST, FUSE_MAX, FUSE_VARIANCE = 0, 1, 2
 
@@ -37,19 +41,23 @@ def _bin_point(
     frame_r2,
     frame_sum,
     frame_n,
+    frame_parts,
     stamp,
     frame_id,
     touched,
     n_touched,
 ):
-    """Keep the point in its cell's frame maximum (and minimum).
+    """Keep the point in its cell's frame maximum (and minimum) and mark its part.
 
     Returns the new touched count, or -1 when the point lies outside the window.
     """
-    gi = np.int64(np.floor(wx * inv_res)) - origin[0]
-    gj = np.int64(np.floor(wy * inv_res)) - origin[1]
+    fi = np.floor(wx * inv_res)
+    fj = np.floor(wy * inv_res)
+    gi = np.int64(fi) - origin[0]
+    gj = np.int64(fj) - origin[1]
     if gi < 0 or gi >= n or gj < 0 or gj >= n:
         return -1
+    part = _part_bit(wx * inv_res - fi, wy * inv_res - fj)
     # Buffer index (g + origin) mod n, with origin mod n precomputed in origin[2:].
     bi = gi + origin[2]
     if bi >= n:
@@ -64,6 +72,7 @@ def _bin_point(
         frame_r2[bi, bj] = r2
         frame_sum[bi, bj] = wz
         frame_n[bi, bj] = 1
+        frame_parts[bi, bj] = part
         touched[n_touched] = bi * n + bj
         n_touched += 1
     else:
@@ -75,7 +84,16 @@ def _bin_point(
             frame_r2[bi, bj] = r2
         frame_sum[bi, bj] += wz
         frame_n[bi, bj] += 1
+        frame_parts[bi, bj] |= part
     return n_touched
+
+
+@njit(cache=True)
+def _part_bit(u, v):
+    """The bit of the cell part holding a point at fractions ``u``, ``v`` of the cell."""
+    a = min(max(np.int64(u * SUB), 0), SUB - 1)
+    b = min(max(np.int64(v * SUB), 0), SUB - 1)
+    return np.uint16(1) << np.uint16(SUB * a + b)
 
 
 @njit(cache=True)
@@ -99,6 +117,7 @@ def bin_depth(
     frame_r2,
     frame_sum,
     frame_n,
+    frame_parts,
     keep_mean,
     stamp,
     frame_id,
@@ -107,8 +126,9 @@ def bin_depth(
 ):
     """Back-project a depth image, move it into the world and keep each cell's highest point.
 
-    ``origin`` holds the window's global origin cell (i, j) and the same modulo n. With
-    ``keep_mean`` the cells also sum their points (a noisy camera's cells take the mean).
+    Each cell also counts its points and marks the parts of it they fell in. ``origin``
+    holds the window's global origin cell (i, j) and the same modulo n. With ``keep_mean``
+    the cells also sum their points (a noisy camera's cells take the mean).
     Returns the number of touched cells (their flat buffer indices are in ``touched``).
     """
     n = frame_h.shape[0]
@@ -140,8 +160,10 @@ def bin_depth(
             wy = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z + trans[1]
             wz = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z + trans[2]
             # Bin (inlined by hand: a helper call here costs a factor of four).
-            gi = np.int64(np.floor(wx * inv_res)) - o_i
-            gj = np.int64(np.floor(wy * inv_res)) - o_j
+            fi = np.floor(wx * inv_res)
+            fj = np.floor(wy * inv_res)
+            gi = np.int64(fi) - o_i
+            gj = np.int64(fj) - o_j
             if gi < 0 or gi >= n or gj < 0 or gj >= n:
                 outside += 1
                 continue
@@ -152,14 +174,16 @@ def bin_depth(
             if bj >= n:
                 bj -= n
             r2 = x * x + y * y + z * z
+            part = _part_bit(wx * inv_res - fi, wy * inv_res - fj)
             if stamp[bi, bj] != frame_id:
                 stamp[bi, bj] = frame_id
                 frame_h[bi, bj] = wz
                 frame_lo[bi, bj] = wz
                 frame_r2[bi, bj] = r2
+                frame_n[bi, bj] = 1
+                frame_parts[bi, bj] = part
                 if keep_mean:
                     frame_sum[bi, bj] = wz
-                    frame_n[bi, bj] = 1
                 touched[n_touched] = bi * n + bj
                 n_touched += 1
             else:
@@ -169,9 +193,10 @@ def bin_depth(
                     frame_lo[bi, bj] = wz
                 if r2 < frame_r2[bi, bj]:
                     frame_r2[bi, bj] = r2
+                frame_n[bi, bj] += 1
+                frame_parts[bi, bj] |= part
                 if keep_mean:  # only a noisy camera's cells take their mean
                     frame_sum[bi, bj] += wz
-                    frame_n[bi, bj] += 1
             valid += 1
     counts[VALID] += valid
     counts[OUTSIDE] += outside
@@ -189,6 +214,7 @@ def bin_points(
     frame_r2,
     frame_sum,
     frame_n,
+    frame_parts,
     stamp,
     frame_id,
     touched,
@@ -216,6 +242,7 @@ def bin_points(
             frame_r2,
             frame_sum,
             frame_n,
+            frame_parts,
             stamp,
             frame_id,
             touched,
@@ -238,10 +265,15 @@ def fuse(
     frame_r2,
     frame_sum,
     frame_n,
+    frame_parts,
     heights,
     spread,
     variance,
     known,
+    parts,
+    points,
+    new_view,
+    evidence_noise,
     rule,
     range_noise,
     process_noise,
@@ -258,7 +290,11 @@ def fuse(
     more than ``gate`` standard deviations off replaces the cell (the scene changed).
 
     A cell's ``spread`` is the largest in-frame height range of its points beyond
-    ``spread_sigmas`` times the sensor's noise (the noise alone spans that much).
+    ``spread_sigmas`` times the sensor's noise (the noise alone spans that much); its
+    ``parts`` gather the parts its points fell in and ``points`` count them, since the cell
+    became known (from a ``new_view`` only: a camera standing still repeats its points; and
+    only while the sensor's noise at the cell is below ``evidence_noise``: noisier points
+    scatter over the parts, and quantized depth lays them on stripes).
 
     An ideal sensor's cell takes the frame's highest point (the top of what is there); a
     noisy sensor's takes the mean of its points, whose noise is the reading's over the
@@ -292,7 +328,12 @@ def fuse(
             heights[i, j] = z
             variance[i, j] = m_var
             known[i, j] = True
+            parts[i, j] = frame_parts[i, j]
+            points[i, j] = frame_n[i, j] if sensor_sigma <= evidence_noise else 0
             continue
+        parts[i, j] |= frame_parts[i, j]
+        if new_view and sensor_sigma <= evidence_noise:
+            points[i, j] += frame_n[i, j]
         if rule == FUSE_LATEST:
             heights[i, j] = z
             variance[i, j] = m_var

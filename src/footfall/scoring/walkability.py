@@ -11,7 +11,9 @@ A cell is valid when it is known, every cell its kernel reaches is known (and in
 the map), ``S_g + S_p`` is below the threshold and, for a mapped cell, the points that
 fell in it within one frame never spanned more than ``max_cell_spread`` in height (a cell
 straddling an edge, or a groove narrower than the grid, hides in its maximum but not in
-its spread), nor did those of its eight neighbours. Defaults reproduce thesis
+its spread), nor did those of its eight neighbours, and it is not partly in a shadow (a
+well-seen cell with a part no point ever hit: a groove narrower than the grid, seen at a
+grazing angle, hides behind its near edge, see :func:`shadowed_cells`). Defaults reproduce thesis
 Figs. 6.6-6.8 on the course terrain: box tops, the ramp and the floor valid; box edges,
 the hole rim, the pillar's and the pedestal's sides invalid. The window (5 cells, 10 cm,
 sigma 2 cm) suits the default robot's 2.4 cm feet: the middle of a 9 cm cobblestone is
@@ -28,6 +30,7 @@ import numpy.typing as npt
 
 from footfall.errors import ConfigError
 from footfall.mapping.height_map import MapSnapshot
+from footfall.mapping.kernels import SUB
 from footfall.scoring import kernels
 
 
@@ -48,6 +51,10 @@ class ScoreConfig:
         noise_sigmas: A noisy map's slope and proximity count only beyond this many
             standard deviations of what its cells' height noise alone gives them (an exact
             map, the simulator's, has none).
+        shadow_points: A cell that has caught at least this many points with a part of it
+            (one of its 4 x 4) never hit lies partly in a shadow, and is invalid: a groove
+            too narrow for the grid, seen at a grazing angle, hides behind its near edge.
+            Fewer points than this may miss a part by chance.
     """
 
     slope_weight: float = 1.0
@@ -57,6 +64,7 @@ class ScoreConfig:
     threshold: float = 0.5
     max_cell_spread: float = 0.002
     noise_sigmas: float = 2.5
+    shadow_points: int = 48
 
     def __post_init__(self) -> None:
         if self.kernel_size < 3 or self.kernel_size % 2 == 0:
@@ -65,6 +73,8 @@ class ScoreConfig:
             raise ConfigError("kernel_sigma and threshold must be positive")
         if self.slope_weight < 0 or self.proximity_weight < 0:
             raise ConfigError("score weights must be >= 0")
+        if self.shadow_points < 1:
+            raise ConfigError(f"shadow_points must be >= 1, got {self.shadow_points}")
 
     @property
     def kernel_1d(self) -> npt.NDArray[np.float64]:
@@ -173,13 +183,48 @@ def edge_cells(
     return np.nan_to_num(np.asarray(spread), nan=0.0) > config.max_cell_spread + planar
 
 
+def shadowed_cells(
+    parts: npt.ArrayLike, points: npt.ArrayLike, config: ScoreConfig
+) -> npt.NDArray[np.bool_]:
+    """Cells partly in a shadow: well seen, yet with a part no point has ever fallen in.
+
+    The shadow may reach on past the cell's side: where half or more of the parts along a
+    side were never hit, the neighbour across it (which may hold the rest of the groove in
+    a sliver too thin for a part of its own) is shadowed too.
+
+    Args:
+        parts: Each cell's bits of hit parts (:class:`~footfall.mapping.height_map.MapSnapshot`).
+        points: Points each cell has caught.
+        config: Score parameters (``shadow_points``).
+    """
+    bits = np.asarray(parts, dtype=np.uint16)
+    full = (1 << (SUB * SUB)) - 1
+    shadow = (np.asarray(points) >= config.shadow_points) & (bits != full)
+    if not shadow.any():
+        return shadow
+    missing = np.where(shadow, ~bits & full, 0)
+    part = np.arange(SUB)
+
+    def open_side(bit_numbers: npt.NDArray[np.int64]) -> npt.NDArray[np.bool_]:
+        never_hit = sum(((missing >> int(b)) & 1) for b in bit_numbers)
+        return never_hit >= (SUB + 1) // 2
+
+    out = shadow.copy()
+    out[:-1, :] |= open_side(part)[1:, :]  # parts a = 0: the low-x side
+    out[1:, :] |= open_side(SUB * (SUB - 1) + part)[:-1, :]
+    out[:, :-1] |= open_side(SUB * part)[:, 1:]  # parts b = 0: the low-y side
+    out[:, 1:] |= open_side(SUB * part + SUB - 1)[:, :-1]
+    return out
+
+
 def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> ScoreMap:
     """Score a height-map snapshot.
 
     A cell that straddles an edge (:func:`edge_cells`) is invalid, and so are its eight
     neighbours: the edge may lie anywhere in it. Its height shows whichever side of the
     edge the last frame saw, so it is scored at the higher side (the highest of its
-    neighbours): a foot nearby keeps its distance from the top of the edge.
+    neighbours): a foot nearby keeps its distance from the top of the edge. A cell partly
+    in a shadow (:func:`shadowed_cells`) is invalid too.
     """
     c = config or ScoreConfig()
     sigma = None if snapshot.variance is None else np.sqrt(snapshot.variance)
@@ -193,4 +238,6 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
         heights[edge] = top[edge]
         slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c, sigma)
         valid &= ~_around(edge, np.logical_or)
+    if snapshot.parts is not None and snapshot.points is not None:
+        valid &= ~shadowed_cells(snapshot.parts, snapshot.points, c)
     return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)

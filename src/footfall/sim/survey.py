@@ -165,6 +165,7 @@ def simulate_mapping(
     on_tick: Callable[[float], None] | None = None,
     bus: InProcessBus | None = None,
     on_mapping: Callable[[MappingNode], None] | None = None,
+    terrain: Terrain | None = None,
 ) -> MappingResult:
     """Walk the (blind) robot across a terrain while mapping it with the body camera.
 
@@ -174,12 +175,15 @@ def simulate_mapping(
         on_tick: Progress callback with the walk time [s].
         bus: The bus to run the nodes on (a recorder may tap it); a new one by default.
         on_mapping: Called with the mapping node once it stands.
+        terrain: The terrain, made to measure; by default ``settings.terrain`` at
+            ``settings.seed``.
 
     Returns:
         The final map, its scores and the metrics.
     """
     rng = np.random.default_rng(settings.seed)
-    terrain = make_terrain(settings.terrain, seed=settings.seed)
+    if terrain is None:
+        terrain = make_terrain(settings.terrain, seed=settings.seed)
     backend = MujocoHexapod(spec, terrain, settings.camera)
     backend.advance(0.3)
     noise = SlamNoise(settings.slam, rng) if settings.noise == "slam" else None
