@@ -121,6 +121,90 @@ def test_the_station_walks_to_a_clicked_goal_and_beats_its_heart():
             station.close()
 
 
+def _walled_map(sequence: int, enclosed: bool = False):
+    """A 3 x 3 m map around the origin, a 30 cm wall across x = 0.5 (|y| < 0.6), scored by
+    the real scorer; ``enclosed`` rings the point (1, 0) with the wall instead."""
+    from footfall.messages import MapUpdate
+    from footfall.scoring.walkability import score_heights
+
+    res = 0.02
+    c = -1.5 + (np.arange(150) + 0.5) * res
+    x, y = np.meshgrid(c, c, indexing="ij")
+    if enclosed:
+        ring = np.hypot(x - 1.0, y)
+        wall = (ring > 0.3) & (ring < 0.36)
+    else:
+        wall = (np.abs(x - 0.5) < 0.03) & (np.abs(y) < 0.6)
+    h = np.where(wall, 0.3, 0.0)
+    slope, proximity, score, valid = score_heights(h, res)
+    return MapUpdate(
+        0.0,
+        sequence,
+        h,
+        np.ones(h.shape, bool),
+        None,
+        slope,
+        proximity,
+        score,
+        valid,
+        (-1.5, -1.5),
+        res,
+    )
+
+
+def test_a_clicked_goal_is_walked_to_round_a_wall_on_the_robots_map():
+    """With the robot's map, a clicked goal behind a wall gets a route round it (never
+    through it) and commands that follow the route, not the straight line; a goal walled
+    in gets a standstill and the reason on the page."""
+    from footfall.messages import GaitState, GaitStatus, MapUpdate, Mode
+    from footfall.robot.planar import PlanarPose
+    from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
+    from footfall.station import Station
+
+    status = GaitStatus(0.0, Mode.WALKING, GaitState.REST, "", "", PlanarPose(0, 0), 0.09, 0, 0, 0)
+
+    def command_once_planned(station, until):
+        while time.monotonic() < until:
+            station.bus.spin(0.05)
+            command = station.command()
+            if station.navigator.route is not None or station.navigator.no_route is not None:
+                return command
+        raise AssertionError("the station never planned")
+
+    with ZenohBus(ZenohConfig()) as bus:
+        station = Station(bus, port=free_port())
+        try:
+            station.status = status
+            bus.publish(MapUpdate.TOPIC, _walled_map(1))
+            end = time.monotonic() + 10.0
+            while station.map is None and time.monotonic() < end:
+                bus.spin(0.05)
+            station.set_goal((1.5, 0.0))
+            command = command_once_planned(station, time.monotonic() + 10.0)
+            route = station.navigator.route
+            assert route is not None
+            a, b = route.points_in_world[:-1], route.points_in_world[1:]
+            t = np.linspace(0.0, 1.0, 200)[None, :, None]
+            dense = (a[:, None] + t * (b - a)[:, None]).reshape(-1, 2)
+            crossing = dense[np.abs(dense[:, 0] - 0.5) < 0.04]
+            assert len(crossing) and (np.abs(crossing[:, 1]) > 0.6).all()
+            assert command.yaw_rate != 0.0 or abs(command.direction[1]) > 0.1
+            station.set_goal((1.0, 0.0))
+            end = time.monotonic() + 20.0
+            sequence = 2
+            while station.navigator.no_route is None and time.monotonic() < end:
+                bus.publish(MapUpdate.TOPIC, _walled_map(sequence, enclosed=True))  # as a robot
+                sequence += 1
+                bus.spin(0.05)
+                command = station.command()
+                time.sleep(0.1)
+            assert station.navigator.no_route is not None and command.speed == 0.0
+            station._draw(time.monotonic())
+            assert "standing still" in station.status_text.content
+        finally:
+            station.close()
+
+
 def test_a_click_meets_the_ground_where_the_ray_does():
     """The goal of a click is the view ray's crossing of z = 0; a ray up or level has none."""
     from footfall.station import ground_point

@@ -20,7 +20,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
             "Connect to the robot's zenoh network and serve a page (viser) with its depth "
             "image, height and score maps, pose, gait status, log and link state, and the "
             "controls: mode (torque off / walking), direction, speed, body height, yaw rate, "
-            "and a goal clicked on the ground. Commands repeat as a heartbeat."
+            "and a goal clicked on the ground, walked to along the route planner's routes on the "
+            "robot's map. Commands repeat as a heartbeat."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -28,6 +29,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--host", default="127.0.0.1", help="address the page is served on")
     p.add_argument("--port", type=int, default=8080, help="port of the page")
     p.add_argument("--seconds", type=float, default=None, help="stop after this long")
+    p.add_argument(
+        "--robot",
+        default="default",
+        help="the hexapod driven: a built-in robot or a robot description TOML file (its "
+        "legs' span sizes the clearance of the routes to a clicked goal)",
+    )
     p.add_argument(
         "--biped",
         action="store_true",
@@ -39,6 +46,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace, console: Console) -> int:
     """Serve the station until Ctrl-C (or --seconds)."""
+    from footfall.robot.spec import load_spec
     from footfall.runtime.scheduler import stop_on_signals
     from footfall.runtime.zenoh_bus import ZenohBus
     from footfall.station import Station
@@ -46,7 +54,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
     # Ctrl-C or SIGTERM ends the run between two updates: an interrupt raised in the middle
     # of one could leave the page server or the session half-way and the process hanging.
     with stop_on_signals() as stopped, ZenohBus(network_config(args)) as bus:
-        station = Station(bus, host=args.host, port=args.port, biped=args.biped)
+        spec = None if args.biped else load_spec(args.robot)
+        station = Station(bus, host=args.host, port=args.port, biped=args.biped, spec=spec)
         console.print(
             f"station for robot [bold]{args.name}[/] at http://{args.host}:{args.port}",
             highlight=False,

@@ -4,8 +4,11 @@ It shows what the robot sends, the depth image, the height and score maps (as im
 a coloured 3-D surface with the robot's body, feet and footholds on it), the pose, the gait
 status (state, why it froze, which leg), the log, and the link (last message's age); and it
 sends the operator's mode and walk command, each on change and repeated at
-``HEARTBEAT_HZ`` as the robot's watchdog expects. A goal clicked on the ground is walked to:
-the station keeps pointing the command at it until the robot is there.
+``HEARTBEAT_HZ`` as the robot's watchdog expects. A goal clicked on the ground is walked to
+along the route planner's routes on the robot's map (the navigation node, replanning on a
+worker thread so the page never waits for a plan), as ``footfall walk`` does; it stands
+still and says why when no route is open. Until a map has come (a robot without a camera)
+the command points straight at the goal. Either way it ends at the goal.
 """
 
 from __future__ import annotations
@@ -38,6 +41,9 @@ from footfall.messages import (
     Trigger,
     WalkCommand,
 )
+from footfall.nodes.navigation import NavigatorNode
+from footfall.planning.navigation import NavigationConfig
+from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.runtime.zenoh_bus import ZenohBus
 from footfall.station.views import (
     circles_segments,
@@ -67,15 +73,33 @@ class Station:
         bus: The network bus to the robot.
         host: Address the page is served on.
         port: Port of the page.
+        biped: The biped's page (its services) rather than the hexapod's.
+        spec: The hexapod (its legs' span sizes the routes' clearance); the default robot
+            unless given.
     """
 
     def __init__(
-        self, bus: ZenohBus, host: str = "127.0.0.1", port: int = 8080, biped: bool = False
+        self,
+        bus: ZenohBus,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        biped: bool = False,
+        spec: HexapodSpec | None = None,
     ) -> None:
         import viser
 
         self.bus = bus
         self.biped = biped
+        self.navigator = (
+            None
+            if biped
+            else NavigatorNode(
+                bus,
+                spec or load_spec("default"),
+                config=NavigationConfig(goal_tolerance_m=GOAL_TOLERANCE_M),
+                background=True,
+            )
+        )
         self.obstacles: Obstacles | None = None
         self.plan: BipedPlan | None = None
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
@@ -95,6 +119,7 @@ class Station:
         self._dirty = True
         self._next_beat = 0.0
         self._next_draw = 0.0
+        self._route_line = None
         self._build_page()
         for topic, handler in (
             (GaitStatus.TOPIC, self._on_status),
@@ -156,14 +181,19 @@ class Station:
         self.mode = mode
         self._changed()
 
-    def _set_direction(self, degrees: float) -> None:
+    def _clear_goal(self) -> None:
         self.goal = None
+        if self.navigator is not None:
+            self.navigator.set_goal(None)
+
+    def _set_direction(self, degrees: float) -> None:
+        self._clear_goal()
         self.direction_deg = degrees
         self.speed = float(self.speed_slider.value)
         self._changed()
 
     def _stop(self) -> None:
-        self.goal = None
+        self._clear_goal()
         self.speed = 0.0
         self._changed()
 
@@ -175,7 +205,9 @@ class Station:
         if self.biped:
             self.call("start_planning", PlanningGoal(xy[0], xy[1]))
             return
-        self.goal = xy
+        self.goal = (float(xy[0]), float(xy[1]))
+        if self.navigator is not None:
+            self.navigator.set_goal(self.goal)
         self._changed()
 
     def call(self, service: str, request: Message) -> Ack:
@@ -242,11 +274,14 @@ class Station:
             pose = self.status.body_pose
             dx, dy = self.goal[0] - pose.x, self.goal[1] - pose.y
             if math.hypot(dx, dy) < GOAL_TOLERANCE_M:
-                self.goal = None
+                self._clear_goal()
                 return WalkCommand(speed=0.0, body_height=height)
+            speed = float(self.speed_slider.value) or 0.1
+            if self.navigator is not None and self.map is not None:
+                base = WalkCommand(speed=speed, body_height=height)
+                return self.navigator.command(time.monotonic(), self.status, base)
             c, s = math.cos(pose.yaw), math.sin(pose.yaw)
             direction = (c * dx + s * dy, -s * dx + c * dy)
-            speed = float(self.speed_slider.value) or 0.1
             return WalkCommand(direction, speed, height, yaw_rate)
         a = math.radians(self.direction_deg)
         return WalkCommand((math.cos(a), math.sin(a)), self.speed, height, yaw_rate)
@@ -288,9 +323,13 @@ class Station:
             s = self.status
             why = f", **{s.frozen_reason}**" if s.frozen_reason else ""
             leg = f" (leg {s.frozen_leg})" if s.frozen_leg else ""
+            route = ""
+            navigator = self.navigator
+            if self.goal is not None and navigator is not None and navigator.no_route is not None:
+                route = f"; **standing still: {navigator.no_route.reason}**"
             self.status_text.content = (
                 f"**status:** {s.mode.value}, {s.state.value}{why}{leg}; "
-                f"{s.steps_taken} steps, {s.footholds_adjusted} footholds adjusted"
+                f"{s.steps_taken} steps, {s.footholds_adjusted} footholds adjusted{route}"
             )
             p = s.body_pose
             self.pose_text.content = (
@@ -330,6 +369,14 @@ class Station:
         if self.footholds:
             holds = np.stack(self.footholds)
             scene.add_point_cloud("/footholds", holds, (0, 220, 0), point_size=0.025)
+        route = None if self.navigator is None or self.goal is None else self.navigator.route
+        if route is not None and len(route.points_in_world) >= 2:
+            self._route_line = scene.add_line_segments(
+                "/route", polyline_segments(route.points_in_world, 0.03), (30, 60, 230)
+            )
+        elif self._route_line is not None:
+            self._route_line.remove()
+            self._route_line = None
         self._draw_biped()
 
     def _draw_biped(self) -> None:
@@ -366,5 +413,7 @@ class Station:
             self.bus.spin(1.0 / rate_hz)
 
     def close(self) -> None:
-        """Stop serving the page."""
+        """Stop serving the page (and the route planner's worker)."""
+        if self.navigator is not None:
+            self.navigator.close()
         self.server.stop()
