@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import math
+from unittest.mock import ANY
 
 import pytest
 
@@ -213,9 +215,18 @@ def test_bench_terrain_writes_its_table_and_chart(tmp_path, monkeypatch, capsys)
         assert {k: v for k, v in a.items() if k != "wall_seconds"} == {
             k: v for k, v in b.items() if k != "wall_seconds"
         }
+    out = tmp_path / "planned"
+    args = ["bench", "terrain", "--seeds", "1", "--seconds", "1", "--terrains", "stairs"]
+    assert main([*args, "--modes", "planned", "--out", str(out)]) == 0
+    alone = json.loads((out / "bench.json").read_text())
+    assert [r["mode"] for r in alone["results"]] == ["planned"]
+    assert alone["results"][0] == {**serial["results"][0], "wall_seconds": ANY}
+    assert math.isnan(alone["blind_success_rate"])
     capsys.readouterr()
     assert main(["bench", "terrain", "--terrains", "stairs,nowhere", "--out", str(tmp_path)]) == 2
     assert "nowhere" in capsys.readouterr().out
+    assert main(["bench", "terrain", "--modes", "planned,asleep", "--out", str(tmp_path)]) == 2
+    assert "asleep" in capsys.readouterr().out
 
 
 def test_walk_paced_to_the_wall_clock(tmp_path):

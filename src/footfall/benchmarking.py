@@ -175,6 +175,23 @@ def terrain_sweep(
     return tuple(entry for entry in TERRAIN_SWEEP if entry[0] in terrains)
 
 
+def terrain_modes(modes: Sequence[str] | None = None) -> tuple[str, ...]:
+    """The named modes (all by default), in ``TERRAIN_MODES``' order.
+
+    Raises:
+        ConfigError: On a mode that is not one of them.
+    """
+    if modes is None:
+        return TERRAIN_MODES
+    unknown = [m for m in modes if m not in TERRAIN_MODES]
+    if unknown or not modes:
+        raise ConfigError(
+            f"no mode {', '.join(map(repr, unknown)) or 'given'}; choose from "
+            f"{', '.join(TERRAIN_MODES)}"
+        )
+    return tuple(m for m in TERRAIN_MODES if m in modes)
+
+
 def _terrain_run(job: tuple[str, str, float, str, int, float]) -> dict[str, object]:
     """One walk of the sweep: ``(terrain, parameter, value, mode, seed, seconds)``."""
     from footfall.robot.spec import load_spec
@@ -247,8 +264,9 @@ def run_terrain_benchmark(
     jobs: int = 1,
     terrains: Sequence[str] | None = None,
     first_seed: int = 0,
+    modes: Sequence[str] | None = None,
 ) -> dict[str, object]:
-    """The terrain sweep in every mode, ``seeds`` runs per configuration.
+    """The terrain sweep in every mode (or ``modes``), ``seeds`` runs per configuration.
 
     Success = reached the goal, no fall, zero invalid footholds; on a terrain without a
     route (``NO_ROUTE_TERRAINS``): stood still and said why, no fall, zero invalid.
@@ -260,6 +278,8 @@ def run_terrain_benchmark(
         jobs: Walks simulated at once, each in its own process.
         terrains: Terrains of the sweep to walk (all by default).
         first_seed: The seeds run from this one up.
+        modes: Modes to walk (all of ``TERRAIN_MODES`` by default); a mode not walked has
+            no success rate.
 
     Returns:
         Per configuration (``results``): runs, successes, falls, invalid footholds, frozen
@@ -268,11 +288,12 @@ def run_terrain_benchmark(
         and the route planner's replan times over the planned runs.
     """
     sweep = terrain_sweep(terrains)
+    chosen = terrain_modes(modes)
     configs = [
         (name, difficulty, value, mode)
         for name, difficulty, values in sweep
         for value in values
-        for mode in TERRAIN_MODES
+        for mode in chosen
     ]
     seed_range = range(first_seed, first_seed + seeds)
     work = [(*config, seed, seconds) for config in configs for seed in seed_range]
@@ -309,7 +330,10 @@ def run_terrain_benchmark(
 
     def rate(mode: str) -> float:
         mine = [r for r in rows if r["mode"] == mode]
-        return sum(r["successes"] for r in mine) / max(sum(r["runs"] for r in mine), 1)
+        runs_of_mode = sum(r["runs"] for r in mine)
+        if not runs_of_mode:
+            return float("nan")
+        return sum(r["successes"] for r in mine) / runs_of_mode
 
     planned = [runs[job] for job in work if job[3] == "planned"]
     medians = [o["replan_ms_median"] for o in planned if np.isfinite(o["replan_ms_median"])]
@@ -318,6 +342,7 @@ def run_terrain_benchmark(
         "seeds": seeds,
         "first_seed": first_seed,
         "terrains": [name for name, _, _ in sweep],
+        "modes": list(chosen),
         "results": rows,
         "planned_success_rate": rate("planned"),
         "straight_success_rate": rate("straight"),
@@ -327,7 +352,9 @@ def run_terrain_benchmark(
     }
 
 
-def terrain_benchmark_runs(seeds: int, terrains: Sequence[str] | None = None) -> int:
+def terrain_benchmark_runs(
+    seeds: int, terrains: Sequence[str] | None = None, modes: Sequence[str] | None = None
+) -> int:
     """How many walks :func:`run_terrain_benchmark` makes."""
     sweep = terrain_sweep(terrains)
-    return len(TERRAIN_MODES) * seeds * sum(len(values) for _, _, values in sweep)
+    return len(terrain_modes(modes)) * seeds * sum(len(values) for _, _, values in sweep)

@@ -61,6 +61,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="NAME,NAME,...",
         help="terrains of the sweep to walk (default: all)",
     )
+    terrain.add_argument(
+        "--modes",
+        type=lambda text: [t.strip() for t in text.split(",") if t.strip()],
+        default=None,
+        metavar="MODE,MODE,...",
+        help="modes to walk: planned, straight, blind (default: all)",
+    )
     terrain.add_argument("--first-seed", type=int, default=0, help="the seeds run from this one up")
     terrain.add_argument(
         "--jobs", type=int, default=1, help="walks simulated at once, one process each"
@@ -186,7 +193,7 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
     from footfall.reports.bench import run_terrain_bench
 
     with _progress(console, "walks") as progress:
-        total = terrain_benchmark_runs(max(args.seeds, 0), args.terrains)
+        total = terrain_benchmark_runs(max(args.seeds, 0), args.terrains, args.modes)
         task = progress.add_task("walking", total=total)
         report = run_terrain_bench(
             args.seeds,
@@ -195,6 +202,7 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
             on_run=lambda label: progress.update(task, advance=1, description=label),
             terrains=args.terrains,
             first_seed=args.first_seed,
+            modes=args.modes,
         )
     paths = report.write(args.out)
     bench = report.to_json()

@@ -65,6 +65,7 @@ def run_terrain_bench(
     on_run: Callable[[str], None] | None = None,
     terrains: Sequence[str] | None = None,
     first_seed: int = 0,
+    modes: Sequence[str] | None = None,
 ) -> BenchReport:
     """Planned, straight and blind walking over the terrain sweep (``run_terrain_benchmark``)."""
     from footfall.benchmarking import run_terrain_benchmark
@@ -76,7 +77,13 @@ def run_terrain_bench(
     return BenchReport(
         "terrain",
         run_terrain_benchmark(
-            seeds, seconds, on_run=on_run, jobs=jobs, terrains=terrains, first_seed=first_seed
+            seeds,
+            seconds,
+            on_run=on_run,
+            jobs=jobs,
+            terrains=terrains,
+            first_seed=first_seed,
+            modes=modes,
         ),
     )
 
