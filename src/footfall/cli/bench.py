@@ -13,6 +13,11 @@ from rich.table import Table
 from footfall.cli.common import wrote
 
 
+def _comma_list(text: str) -> list[str]:
+    """``A,B,...`` as names, blanks dropped."""
+    return [t.strip() for t in text.split(",") if t.strip()]
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``bench`` and its suites."""
     p = subparsers.add_parser(
@@ -56,14 +61,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     terrain.add_argument("--seconds", type=float, default=150.0, help="longest walk in seconds")
     terrain.add_argument(
         "--terrains",
-        type=lambda text: [t.strip() for t in text.split(",") if t.strip()],
+        type=_comma_list,
         default=None,
         metavar="NAME,NAME,...",
         help="terrains of the sweep to walk (default: all)",
     )
     terrain.add_argument(
         "--modes",
-        type=lambda text: [t.strip() for t in text.split(",") if t.strip()],
+        type=_comma_list,
         default=None,
         metavar="MODE,MODE,...",
         help="modes to walk: planned, straight, blind (default: all)",
