@@ -9,6 +9,9 @@ along the route planner's routes on the robot's map (the navigation node, replan
 worker thread so the page never waits for a plan), as ``footfall walk`` does; it stands
 still and says why when no route is open. Until a map has come (a robot without a camera)
 the command points straight at the goal. Either way it ends at the goal.
+
+It is one module: the page's widgets, the handlers that fill them and the loop that sends
+the commands share one station's state.
 """
 
 from __future__ import annotations
