@@ -160,8 +160,10 @@ def bin_depth(
             wy = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z + trans[1]
             wz = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z + trans[2]
             # Bin (inlined by hand: a helper call here costs a factor of four).
-            fi = np.floor(wx * inv_res)
-            fj = np.floor(wy * inv_res)
+            si = wx * inv_res
+            sj = wy * inv_res
+            fi = np.floor(si)
+            fj = np.floor(sj)
             gi = np.int64(fi) - o_i
             gj = np.int64(fj) - o_j
             if gi < 0 or gi >= n or gj < 0 or gj >= n:
@@ -174,7 +176,10 @@ def bin_depth(
             if bj >= n:
                 bj -= n
             r2 = x * x + y * y + z * z
-            part = _part_bit(wx * inv_res - fi, wy * inv_res - fj)
+            # The point's part (as _part_bit, inlined too).
+            a = min(max(np.int64((si - fi) * SUB), 0), SUB - 1)
+            b = min(max(np.int64((sj - fj) * SUB), 0), SUB - 1)
+            part = np.uint16(1) << np.uint16(SUB * a + b)
             if stamp[bi, bj] != frame_id:
                 stamp[bi, bj] = frame_id
                 frame_h[bi, bj] = wz
