@@ -95,6 +95,62 @@ def test_reach_scale_keeps_the_foot_in_the_workspace(default_spec):
     assert governor.scale(feet, stance, (0.0, 0.0), 0.0, np.ones(6)) == 1.0
 
 
+def test_the_governor_counts_the_body_rising_before_a_foot_lifts(default_spec):
+    """A supporting hind foot that the body's drift leaves just within reach, with the body
+    about to rise to a new floor: the governor lets the body drift fully on a level floor,
+    and slows it when the rise is counted, so the foot stays reached once the body has
+    risen."""
+    kin = LegKinematics(default_spec)
+    governor = StrokeGovernor(TRIPOD, kin, default_spec.rest_feet_in_body(), 0.01)
+    hind = default_spec.leg_names.index("LB")
+    feet = _standing(default_spec)
+    drift = np.array([-0.1, 0.0, 0.0])  # 0.1 m/s until lift-off in 1 s
+    while kin.reachable(hind, feet[hind] + drift - [0.002, 0.0, 0.0], 0.01):
+        feet[hind, 0] -= 0.002
+    stance = np.zeros(6, dtype=bool)
+    stance[hind] = True
+    horizons = np.ones(6)
+    rise = np.full(6, 0.03)
+    assert governor.scale(feet, stance, (0.1, 0.0), 0.0, horizons) == 1.0
+    risen = governor.scale(feet, stance, (0.1, 0.0), 0.0, horizons, rise)
+    assert risen < 1.0
+    after = feet[hind] + risen * drift - [0.0, 0.0, rise[hind]]
+    assert kin.reachable(hind, after, 0.01) or risen == 0.0
+
+
+def test_a_swinging_foot_beyond_the_stretched_leg_is_drawn_in(default_spec):
+    """A foot lifted off a stretched leg as the body rose is out of reach below the hip,
+    where lowering it cannot help: the solver draws it in towards the leg until reached,
+    and moves it no farther than that."""
+    kin = LegKinematics(default_spec)
+    solver = LegSolver(kin, default_spec.foot_radius)
+    feet = _standing(default_spec)
+    back = 2 if default_spec.leg_names[2].endswith("B") else 3
+    out_of_reach = feet.copy()
+    direction = feet[back, :2] - kin.mounts_in_body[back, :2]
+    direction /= np.linalg.norm(direction)
+    while kin.reachable(back, out_of_reach[back]):
+        out_of_reach[back, :2] += 0.002 * direction
+    out_of_reach[back, :2] += 0.002 * direction
+    assert not kin.reachable(back, out_of_reach[back] - [0.0, 0.0, 0.1])
+    swing = np.zeros(6, dtype=bool)
+    swing[back] = True
+    out = solver.solve(
+        out_of_reach, swing, PlanarPose(), NO_FEEDBACK, ((0.0, 0.0), 0.0), np.zeros((6, 3))
+    )
+    assert kin.reachable(back, out.feet_in_body[back])
+    assert np.linalg.norm(out.feet_in_body[back] - out_of_reach[back]) < 0.01
+    with pytest.raises(UnreachableTargetError):
+        solver.solve(
+            out_of_reach,
+            np.zeros(6, dtype=bool),
+            PlanarPose(),
+            NO_FEEDBACK,
+            ((0.0, 0.0), 0.0),
+            np.zeros((6, 3)),
+        )
+
+
 # Gait scheduler -------------------------------------------------------------------------
 def test_scheduler_alternates_tripods_and_times_steps(default_spec):
     """After the first tripod (from the walk direction), the tripods alternate; each leg's

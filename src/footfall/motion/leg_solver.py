@@ -25,6 +25,9 @@ from footfall.motion.feedback import BodyFeedback
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 
+# A foot drawn in stops this far inside the stretched leg [m].
+_DRAWN_IN_SLACK = 1e-4
+
 
 @dataclass(frozen=True)
 class FootTargets:
@@ -76,7 +79,9 @@ class LegSolver:
         A swing lifted over the terrain can ask for more than a leg reaches near the body;
         the foot then flies as high as the leg allows. A swing whose path sweeps past the
         coxa's range (the body lagging behind the plan) is turned back to the range's edge.
-        Supporting feet are never moved.
+        A foot that lifted off a stretched leg while the body moved on (a late tick, the
+        body rising to a new floor) is drawn in towards its femur joint until the leg
+        reaches it. Supporting feet are never moved.
         """
         out = feet_in_body.copy()
         for leg in np.flatnonzero(swinging & ~self.kinematics.reachable_all(out)):
@@ -87,7 +92,28 @@ class LegSolver:
                 if ok.any():
                     out[leg] = lowered[int(np.argmax(ok))]
                     break
+                drawn = self.drawn_in(int(leg), candidate)
+                if self.kinematics.reachable(int(leg), drawn):
+                    out[leg] = drawn
+                    break
         return out
+
+    def drawn_in(self, leg: int, foot_in_body: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """The foot moved towards its femur joint to just inside the stretched leg [m]."""
+        k = self.kinematics
+        points = np.zeros((6, 3))
+        points[leg] = foot_in_body
+        x, y, z = k.body_to_leg(points)[leg]
+        d = math.hypot(x, y)
+        r = d - k.L1
+        reach = math.hypot(r, z)
+        stretched = k.L2 + k.L3 - _DRAWN_IN_SLACK
+        if reach <= stretched or d == 0.0:
+            return foot_in_body.copy()
+        s = stretched / reach
+        d_new = k.L1 + r * s
+        points[leg] = [x * d_new / d, y * d_new / d, z * s]
+        return k.leg_to_body(points)[leg]
 
     def within_coxa_range(
         self, leg: int, foot_in_body: npt.NDArray[np.float64]

@@ -47,6 +47,7 @@ class StrokeGovernor:
         velocity: tuple[float, float],
         yaw_rate: float,
         horizons: npt.NDArray[np.float64],
+        rises: npt.NDArray[np.float64] | None = None,
     ) -> float:
         """The twist fraction every supporting foot allows until it lifts off.
 
@@ -56,9 +57,14 @@ class StrokeGovernor:
             velocity: Body velocity in the body frame [m/s].
             yaw_rate: Body yaw rate [rad/s].
             horizons: Time until each leg lifts off, shape (6,) [s].
+            rises: How far the body rises before each leg lifts off, shape (6,) [m]: the
+                feet sink by as much in the body frame (mapped footholds only).
         """
         vx, vy = velocity
         feet = feet_in_body
+        if rises is not None and self.reach_margin is not None:
+            feet = feet.copy()
+            feet[:, 2] -= rises
         # Body-frame velocity of a world-fixed point: -(v + omega x p).
         drift = np.stack([-vx + yaw_rate * feet[:, 1], -vy - yaw_rate * feet[:, 0]], axis=1)
         scale = 1.0

@@ -268,12 +268,20 @@ class WalkController:
             # The body only travels while the legs step, and stops at once when a swinging
             # foot has to go back to where it lifted off.
             return 0.0
+        horizons = self.scheduler.liftoff_horizons(t)
+        command = self.shaper.last_command
+        rises = None
+        if command is not None:
+            # The body keeps rising (or sinking) towards its height over the new floor.
+            reach = self.config.height_rate_limit * horizons
+            rises = np.clip(self.floor + command.body_height - self.height, -reach, reach)
         scale = self.governor.scale(
             self.feet_in_body(),
             ~self.swinging,
             self.shaper.velocity,
             self.shaper.yaw_rate,
-            self.scheduler.liftoff_horizons(t),
+            horizons,
+            rises,
         )
         return max(min(scale, self._step_speed_scale), 0.0)
 
@@ -283,7 +291,18 @@ class WalkController:
         self.pose = self.pose.moved((v[0] * k, v[1] * k), self.shaper.yaw_rate * k, dt)
         dh = self.floor + command.body_height - self.height
         limit = self.config.height_rate_limit * dt
-        self.height += float(np.clip(dh, -limit, limit))
+        dh = float(np.clip(dh, -limit, limit))
+        if dh != 0.0 and self.state is GaitState.STEPPING:
+            # Stepping, the height waits while a supporting foot would leave its leg's reach:
+            # the foot lifts soon, and the body goes on once it has. (Standing, a height no
+            # leg reaches freezes the robot with the reason.)
+            feet = self.feet_in_body()
+            stance = ~self.swinging
+            before = self.kinematics.reachable_all(feet)
+            feet[:, 2] -= dh
+            if np.any(stance & before & ~self.kinematics.reachable_all(feet)):
+                dh = 0.0
+        self.height += dh
 
     def _advance_gait(self, t: float) -> None:
         if self.state is GaitState.STEPPING and self.scheduler.step_over(t):
