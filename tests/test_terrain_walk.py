@@ -52,6 +52,7 @@ def test_footholds_land_where_planned(stairs_walk):
     assert all(np.isfinite(t.chosen_in_world).all() for t in stairs_walk.touchdowns)
 
 
+@pytest.mark.slow
 def test_eight_centimetre_stairs_are_climbed_and_descended():
     """Stairs nearly as high as the body: the body height is planned with the footholds,
     so it rises over each step and lowers itself to step down, keeping every foot in
@@ -68,6 +69,7 @@ def test_eight_centimetre_stairs_are_climbed_and_descended():
     assert abs(m["body_z_tracking_error_mean_m"]) < 0.01
 
 
+@pytest.mark.slow
 def test_planning_beats_the_blind_baseline_on_cobblestones():
     """Cobblestones: planned walking reaches the goal without falling, tilting under 2 deg,
     with far fewer invalid footholds than the blind baseline."""
