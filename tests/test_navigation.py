@@ -251,6 +251,52 @@ def test_the_navigator_stands_still_without_a_route_and_goes_when_one_opens():
     navigator.close()
 
 
+def _frozen(t: float, pose: PlanarPose, leg: str) -> GaitStatus:
+    reason = f"leg {leg}: no valid, reachable and stable cell within 0.16 m"
+    return GaitStatus(t, Mode.WALKING, GaitState.FROZEN, reason, leg, pose, 0.09, 0, 0, 0.0)
+
+
+def test_a_walker_stuck_where_a_foot_has_not_looked_turns_to_look_once():
+    """Flat ground seen only ahead and to the left: a robot facing +x whose right middle
+    foot finds no foothold (its place unseen) keeps retrying and freezing; the navigator
+    counts it stuck across the retries, turns it on the spot to face that place until it
+    does, then follows the route again. Stuck at the same place again, it does not look a
+    second time but keeps the ground ahead out of the route."""
+    x, y = _grid_xy()
+    seen = y > -0.1  # the right-hand side of the robot (y < 0) never came into view
+    bus = InProcessBus()
+    logs = []
+    bus.subscribe("log", logs.append)
+    navigator = NavigatorNode(bus, SPEC, (2.0, 0.0), NavigationConfig(blocked_after_s=1.0))
+    bus.publish(MapUpdate.TOPIC, _update(np.zeros_like(x), known=seen))
+    pose, base = PlanarPose(0.0, 0.0, 0.0), WalkCommand(speed=0.1)
+    t = 0.0
+    while t < 1.4:  # freezes, retries on fresh maps, freezes again, never moving
+        frozen = int(t / 0.3) % 2 == 0
+        status = _frozen(t, pose, "RM") if frozen else _status(t, pose)
+        command = navigator.command(t, status, base)
+        t += 0.05
+    assert navigator.looks == 1
+    assert any("RM has not seen where it steps" in line.text for line in logs)
+    place = navigator._looked[0]
+    assert place[1] < -0.1  # the right middle foot's place, on the unseen side
+    facing = math.atan2(place[1] - pose.y, place[0] - pose.x)
+    assert command.speed == 0.0 and command.yaw_rate < 0.0  # turning right, on the spot
+    bus.publish(MapUpdate.TOPIC, _update(np.zeros_like(x), sequence=2))  # the look shows it
+    while command.speed == 0.0 and command.yaw_rate < 0.0:
+        pose = PlanarPose(0.0, 0.0, pose.yaw + command.yaw_rate * 0.05)
+        command = navigator.command(t, _status(t, pose), base)
+        t += 0.05
+        assert t < 20.0
+    assert abs(pose.yaw - facing) < math.radians(11.0)
+    assert navigator.route is not None and command.yaw_rate > 0.0  # back towards the goal
+    for _ in range(30):
+        command = navigator.command(t, _frozen(t, pose, "RM"), base)
+        t += 0.05
+    assert navigator.looks == 1 and navigator.blocked_count == 1
+    navigator.close()
+
+
 def test_a_background_replan_leaves_the_command_tick_free():
     """On a worker thread a replan never holds up a command: each returns at once (the
     first ones standing still until the route comes), and the route arrives."""

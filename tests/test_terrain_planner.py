@@ -78,6 +78,32 @@ def test_a_step_down_is_reached_by_lowering_the_body(default_spec):
     np.testing.assert_allclose(plan.targets[FRONT, 2], spec.foot_radius - drop)
 
 
+def test_a_leg_with_nowhere_to_go_steps_where_it_stands_only_when_the_body_stays(default_spec):
+    """The right middle foot's nominal foothold lies on unseen ground. Turning on the spot
+    (the body stays), the leg steps where it stands, on a valid cell; walking on (the body
+    travels), the step has no foothold and says which leg."""
+    spec = default_spec
+    rm = spec.leg_names.index("RM")
+    feet = _standing_feet(spec)
+    y = -1.0 + (np.arange(100) + 0.5) * RES
+    heights = np.zeros((100, 100))
+    heights[:, y < feet[rm, 1] - 0.03] = np.nan  # unseen beyond the foot
+    planner = _planner(spec, heights)
+    swing = np.zeros(6, dtype=bool)
+    swing[rm] = True
+    nominal = feet.copy()
+    nominal[rm, 1] -= 0.2  # where a turn or a sidestep would put it: unseen
+    plan = planner.plan(nominal, swing, ~swing | swing, feet, _poses(), [spec.body_height])
+    assert not isinstance(plan, NoFoothold), plan
+    assert np.hypot(*(plan.targets[rm, :2] - feet[rm, :2])) < planner.config.footholds.search_radius
+    i, j = ((plan.targets[rm, :2] - (-1.0)) // RES).astype(int)
+    assert planner.scores.valid[i, j]
+    ahead = PlanarPose(0.06, 0.0, 0.0)
+    travelling = StepPoses(now=PlanarPose(), touchdown=ahead, liftoff=ahead, stable=(ahead,))
+    refused = planner.plan(nominal, swing, ~swing | swing, feet, travelling, [spec.body_height])
+    assert isinstance(refused, NoFoothold) and "leg RM" in refused.reason
+
+
 def test_the_body_keeps_its_least_clearance(default_spec):
     """Terrain under the body rules out the heights that would bring the body within the
     least clearance; when none is left the plan names the problem."""

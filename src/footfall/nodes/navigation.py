@@ -5,7 +5,10 @@ It keeps the newest :class:`~footfall.messages.MapUpdate`, builds the cost grid 
 (:mod:`footfall.planning.navigation`), and turns the route into walk commands for the
 movement node. A route is replanned once it is ``replan_period_s`` old and a newer map has
 come, and at once when the walker has frozen for want of footholds (the ground ahead is
-then kept out for a while: the route was blocked there). When no route reaches the goal
+then kept out for a while: the route was blocked there). A walker frozen because a foot's
+place has not been seen (the camera looks ahead, and a route that turns close beside the
+edge of what it has seen puts feet where it never looked) first turns on the spot to face
+that place, once per place, and walks on when the map has it. When no route reaches the goal
 (confirmed over a few replans) it says why and commands standing still; it keeps
 replanning, and walks again once a route opens.
 
@@ -43,6 +46,15 @@ from footfall.runtime.bus import Bus
 
 # Replan times kept for the timing figures.
 TIMING_HISTORY = 10_000
+# A foot's place counts as unseen when less than this share of the cells around it is known.
+UNSEEN_SHARE = 0.5
+# A look is done when the body faces the place within this [rad], or after this long [s].
+LOOK_DONE_RAD = math.radians(10.0)
+LOOK_TIMEOUT_S = 10.0
+# A walker that froze and has not moved farther than this since is still stuck there [m].
+STUCK_RADIUS_M = 0.1
+# A place within this of one already looked at is not looked at again [m].
+LOOKED_RADIUS_M = 0.1
 
 
 @dataclass(frozen=True)
@@ -141,12 +153,15 @@ class NavigatorNode:
         self.bus = bus
         self.config = config or NavigationConfig()
         self.span_radius_m = span_radius(spec)
+        self.leg_names = spec.leg_names
+        self.rest_feet_in_body = spec.rest_feet_in_body()[:, :2]
         self.goal: tuple[float, float] | None = None
         self.route: Route | None = None
         self.no_route: NoRoute | None = None
         self.grid: CostGrid | None = None
         self.replans = 0
         self.blocked_count = 0
+        self.looks = 0
         self.plan_seconds: deque[float] = deque(maxlen=TIMING_HISTORY)
         self._map: MapUpdate | None = None
         self._planned_sequence = -1
@@ -155,8 +170,11 @@ class NavigatorNode:
         self._misses = 0
         self._blocked: list[tuple[float, float, float, float]] = []
         self._frozen_since: float | None = None
+        self._frozen_at: tuple[float, float] | None = None
         self._blocked_this_freeze = False
         self._last_command: WalkCommand | None = None
+        self._look: tuple[float, float] | None = None  # (yaw to face [rad], until [s])
+        self._looked: list[tuple[float, float]] = []
         self._walls = WallMemory()
         self._pool = ThreadPoolExecutor(max_workers=1) if background else None
         self._pending: Future[PlanOutcome] | None = None
@@ -220,14 +238,34 @@ class NavigatorNode:
 
     def _watch_freeze(self, t: float, status: GaitStatus) -> None:
         """Keep the ground ahead of a walker frozen for want of footholds out of routes."""
+        pose = status.body_pose
+        if self._frozen_at is not None and (
+            math.hypot(pose.x - self._frozen_at[0], pose.y - self._frozen_at[1]) > STUCK_RADIUS_M
+        ):
+            # Walked on from where it froze: the next freeze starts the count afresh.
+            self._frozen_since, self._frozen_at, self._blocked_this_freeze = None, None, False
         if status.state is not GaitState.FROZEN:
-            self._frozen_since, self._blocked_this_freeze = None, False
             return
         if self._frozen_since is None:
-            self._frozen_since = t
+            # Counted from the first freeze here: a walker that retries on each fresh map
+            # and freezes again at once is as stuck as one that stays frozen.
+            self._frozen_since, self._frozen_at = t, (pose.x, pose.y)
         if self._blocked_this_freeze or t - self._frozen_since < self.config.blocked_after_s:
             return
-        pose = status.body_pose
+        place = self._unseen_place(status)
+        if place is not None:
+            self._looked.append(place)
+            yaw = math.atan2(place[1] - pose.y, place[0] - pose.x)
+            self._look = (yaw, t + LOOK_TIMEOUT_S)
+            self._blocked_this_freeze = True
+            self.looks += 1
+            self._log(
+                t,
+                "info",
+                f"leg {status.frozen_leg} has not seen where it steps ({place[0]:.2f}, "
+                f"{place[1]:.2f}) m; turning to look",
+            )
+            return
         heading = pose.yaw
         command = self._last_command
         if command is not None and command.speed > 0:
@@ -242,6 +280,45 @@ class NavigatorNode:
         self._log(
             t, "info", f"route blocked at ({x:.2f}, {y:.2f}) m ({status.frozen_reason}); replanning"
         )
+
+    def _unseen_place(self, status: GaitStatus) -> tuple[float, float] | None:
+        """Where the frozen leg steps at rest, if the map has not seen it and no look has."""
+        update = self._map
+        if update is None or status.frozen_leg not in self.leg_names:
+            return None
+        pose = status.body_pose
+        foot = self.rest_feet_in_body[self.leg_names.index(status.frozen_leg)]
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        x, y = pose.x + c * foot[0] - s * foot[1], pose.y + s * foot[0] + c * foot[1]
+        if any(math.hypot(x - a, y - b) < LOOKED_RADIUS_M for a, b in self._looked):
+            return None
+        known = np.asarray(update.known, dtype=bool)
+        res = update.resolution
+        half = max(1, round(self.config.traversability.support_radius_m / res))
+        i = math.floor((x - update.origin[0]) / res)
+        j = math.floor((y - update.origin[1]) / res)
+        n = known.shape[0]
+        around = known[
+            max(i - half, 0) : min(i + half + 1, n), max(j - half, 0) : min(j + half + 1, n)
+        ]
+        seen = float(around.mean()) if around.size else 0.0
+        return (x, y) if seen < UNSEEN_SHARE else None
+
+    def _looking(self, t: float, pose: PlanarPose, base: WalkCommand) -> WalkCommand | None:
+        """The turn on the spot of a look under way, or None once it is done."""
+        if self._look is None:
+            return None
+        yaw, until = self._look
+        error = math.atan2(math.sin(yaw - pose.yaw), math.cos(yaw - pose.yaw))
+        if abs(error) < LOOK_DONE_RAD or t > until:
+            self._look = None
+            self._force = True  # plan on what the look showed
+            # Stuck here again after the look: the count starts afresh, and ends in a block.
+            self._frozen_since, self._frozen_at, self._blocked_this_freeze = None, None, False
+            return None
+        rate = self.config.max_yaw_rate
+        yaw_rate = float(np.clip(self.config.yaw_gain * error, -rate, rate))
+        return WalkCommand(speed=0.0, body_height=base.body_height, yaw_rate=yaw_rate, stamp=t)
 
     def _replan(self, t: float, pose: PlanarPose) -> None:
         if self._pending is not None and self._pending.done():
@@ -266,8 +343,11 @@ class NavigatorNode:
         pose = status.body_pose
         self._watch_freeze(t, status)
         stop = WalkCommand(speed=0.0, body_height=base.body_height, stamp=t)
+        look = self._looking(t, pose, base)
         if self.goal is None or self.at_goal(pose):
             command = stop
+        elif look is not None:
+            command = look
         else:
             self._replan(t, pose)
             if self.route is None:
@@ -288,6 +368,7 @@ class NavigatorNode:
             "replan_ms_median": 1e3 * statistics.median(times),
             "replan_ms_p95": 1e3 * p95,
             "routes_blocked": self.blocked_count,
+            "looks": self.looks,
         }
 
     def close(self) -> None:

@@ -28,6 +28,9 @@ from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 from footfall.scoring.walkability import ScoreMap
 
+# A step whose body travels less than this from now to lift-off is a step in place [m].
+IN_PLACE_TRAVEL_M = 0.02
+
 
 @dataclass(frozen=True)
 class TerrainPlannerConfig:
@@ -227,6 +230,10 @@ class TerrainPlanner:
         least_margin = registration_margin_cells(self.registration_error_m, self._search.resolution)
         # A foothold is reached from the body now (it may stop at any time) to lift-off.
         reach_poses = (poses.now, poses.touchdown, poses.liftoff)
+        in_place = all(
+            math.hypot(p.x - poses.now.x, p.y - poses.now.y) < IN_PLACE_TRAVEL_M
+            for p in (poses.touchdown, poses.liftoff)
+        )
         for leg in (int(k) for k in np.flatnonzero(swinging)):
 
             def reached_at(
@@ -261,6 +268,16 @@ class TerrainPlanner:
                 first_accepted=first_accepted,
                 min_margin_cells=least_margin,
             )
+            if foothold is None and in_place:
+                # The body hardly travels this step (a turn on the spot): a leg with nowhere
+                # to go near its nominal foothold may step where it stands.
+                foothold = self._search.search(
+                    feet[leg, :2],
+                    self.scores,
+                    self.snapshot.heights,
+                    first_accepted=first_accepted,
+                    min_margin_cells=least_margin,
+                )
             if foothold is None:
                 drift = (
                     f" at least {least_margin} cells from invalid ones (the map may lie "
