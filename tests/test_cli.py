@@ -238,3 +238,5 @@ def test_walk_paced_to_the_wall_clock(tmp_path):
     metrics = json.loads((out / "metrics.json").read_text())
     assert 0.7 < metrics["realtime_factor"] <= 1.05
     assert metrics["control_overruns"] >= 0 and "control_max_late_s" in metrics
+    times = [metrics[f"command_ms_{k}"] for k in ("median", "p99", "max")]
+    assert 0 <= times[0] <= times[1] <= times[2]
