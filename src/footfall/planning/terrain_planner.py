@@ -261,23 +261,20 @@ class TerrainPlanner:
                         return int(m)
                 return -1
 
-            foothold = self._search.search(
-                nominal[leg, :2],
-                self.scores,
-                self.snapshot.heights,
-                first_accepted=first_accepted,
-                min_margin_cells=least_margin,
-            )
-            if foothold is None and in_place:
-                # The body hardly travels this step (a turn on the spot): a leg with nowhere
-                # to go near its nominal foothold may step where it stands.
+            # The body hardly travelling this step (a turn on the spot), a leg with nowhere
+            # to go near its nominal foothold may step where it stands.
+            origins = (nominal[leg, :2], feet[leg, :2]) if in_place else (nominal[leg, :2],)
+            foothold = None
+            for origin in origins:
                 foothold = self._search.search(
-                    feet[leg, :2],
+                    origin,
                     self.scores,
                     self.snapshot.heights,
                     first_accepted=first_accepted,
                     min_margin_cells=least_margin,
                 )
+                if foothold is not None:
+                    break
             if foothold is None:
                 drift = (
                     f" at least {least_margin} cells from invalid ones (the map may lie "
