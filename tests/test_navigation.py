@@ -251,6 +251,24 @@ def test_the_navigator_stands_still_without_a_route_and_goes_when_one_opens():
     navigator.close()
 
 
+def test_an_unchanged_map_without_a_route_is_confirmed_and_said():
+    """One map, walled in, that never changes (a robot standing still with nothing new in
+    view): the navigator plans on it again each period, confirms there is no route and says
+    why, rather than waiting for a new map that would not come."""
+    x, y = _grid_xy()
+    pen = np.where(np.maximum(np.abs(x - 0.5), np.abs(y - 0.5)) >= 0.9, 0.3, 0.0)
+    bus = InProcessBus()
+    config = NavigationConfig(replan_period_s=0.1)
+    navigator = NavigatorNode(bus, SPEC, (3.0, 0.5), config)
+    bus.publish(MapUpdate.TOPIC, _update(pen))
+    pose, base = PlanarPose(0.5, 0.5, 0.0), WalkCommand(speed=0.1)
+    for k in range(10 * config.confirm_no_route):
+        command = navigator.command(0.05 * k, _status(0.05 * k, pose), base)
+    assert navigator.no_route is not None and "closed" in navigator.no_route.reason
+    assert command.speed == 0.0
+    navigator.close()
+
+
 def _frozen(t: float, pose: PlanarPose, leg: str) -> GaitStatus:
     reason = f"leg {leg}: no valid, reachable and stable cell within 0.16 m"
     return GaitStatus(t, Mode.WALKING, GaitState.FROZEN, reason, leg, pose, 0.09, 0, 0, 0.0)

@@ -329,7 +329,10 @@ class NavigatorNode:
         if update is None or goal is None or self._pending is not None:
             return
         due = self._force or t - self._planned_at >= self.config.replan_period_s
-        if not due or (update.sequence == self._planned_sequence and not self._force):
+        # Without a route the same map is planned on again (the robot may have moved), so an
+        # unchanged map that has no route confirms it and the robot says why it stands.
+        same_map = update.sequence == self._planned_sequence and self.route is not None
+        if not due or (same_map and not self._force):
             return
         self._force = False
         self._planned_at, self._planned_sequence = t, update.sequence
