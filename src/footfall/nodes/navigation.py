@@ -286,10 +286,8 @@ class NavigatorNode:
         update = self._map
         if update is None or status.frozen_leg not in self.leg_names:
             return None
-        pose = status.body_pose
         foot = self.rest_feet_in_body[self.leg_names.index(status.frozen_leg)]
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-        x, y = pose.x + c * foot[0] - s * foot[1], pose.y + s * foot[0] + c * foot[1]
+        x, y = (float(v) for v in status.body_pose.points_to_world(foot))
         if any(math.hypot(x - a, y - b) < LOOKED_RADIUS_M for a, b in self._looked):
             return None
         known = np.asarray(update.known, dtype=bool)
