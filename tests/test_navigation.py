@@ -110,12 +110,14 @@ def test_a_tall_box_is_lethal_within_the_legs_span_and_a_low_step_is_not():
     assert not step.lethal.any()
 
 
-def test_a_deep_narrow_trench_is_straddled_and_a_wide_pit_is_not():
-    """The rim of a 10 cm trench 30 cm deep is at the robot's own level: a body centred
-    over it is not in a wall (its feet find the platforms); a pit wider than the legs'
-    span is neither walked into nor over, but round."""
+@pytest.mark.parametrize("width", [0.05, 0.10, 0.15])
+def test_a_deep_narrow_trench_is_straddled_and_a_wide_pit_is_not(width):
+    """The rim of a trench 30 cm deep, narrower than a step, is at the robot's own level: a
+    body centred over it is not in a wall (its feet find the platforms), even where the
+    scorer leaves nothing valid under the body; a pit wider than the legs' span is neither
+    walked into nor over, but round."""
     x, y = _grid_xy()
-    trench = np.where(np.abs(x - 0.5) <= 0.05, -0.3, 0.0)
+    trench = np.where(np.abs(x - 0.5) <= width / 2, -0.3, 0.0)
     grid = cost_grid(_update(trench), TraversabilityConfig(), SPAN)
     assert np.isfinite(grid.cost[np.abs(x - 0.5) < 0.03]).all()
     pit = np.where(np.hypot(x - 0.5, y - 0.5) <= 0.6, -0.3, 0.0)

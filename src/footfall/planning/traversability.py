@@ -8,10 +8,10 @@ as a whole may stand, legs spread around it. For a body centred on a cell it che
   remembers walls (a face seen obliquely may later leave its cell only the face's foot as
   height) until their cells are seen flat. A robot whose
   legs' span (``span_radius_m``) reaches a wall top higher than the ground it stands on
-  (the highest foothold-valid cell within ``ground_radius_m`` of its centre) by more than
-  half ``max_rise_m`` would put a leg into it: lethal. A wall top at the robot's own level
-  (the rim of a pit or a gap it straddles) is not. The ground is the lower of that and the
-  mean valid height over the span, so that a small block's top is no place to stand.
+  (the median foothold-valid height over the span) by more than half ``max_rise_m`` would
+  put a leg into it: lethal. A wall top at the robot's own level (the rim of a pit or a
+  gap it straddles, however much of the floor below is seen) is not; the top of a block
+  smaller than the span is no place to stand.
 - **Support.** A foot needs a valid cell within ``support_radius_m`` of where its leg puts
   it, not far below the ground near it (a pit floor deeper than ``max_rise_m`` is out of
   reach). The share of known cells in the ring the feet sweep (between half the span and
@@ -42,6 +42,10 @@ from footfall.robot.spec import HexapodSpec
 
 _SQUARE = np.ones((3, 3), dtype=bool)
 _CROSS = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
+# The ground level's median is taken on every this many cells along each axis.
+MEDIAN_STRIDE = 3
+# Below this share of valid cells in its span a body has no ground to stand on.
+MIN_GROUND_SHARE = 0.05
 
 
 @dataclass(frozen=True)
@@ -53,8 +57,6 @@ class TraversabilityConfig:
             takes it from the robot (see :func:`span_radius`).
         max_rise_m: Highest rise the legs climb as a step [m].
         wall_run_m: A rise within this horizontal run is a wall face [m].
-        ground_radius_m: The robot stands on the highest valid cell within this of its
-            centre [m].
         support_radius_m: A foot finds a foothold within this of where its leg puts it [m].
         max_unsupported: Share of the feet's ring without a foothold near that is lethal.
         unsupported_cost: Extra cost per metre of a fully unsupported ring.
@@ -66,7 +68,6 @@ class TraversabilityConfig:
     span_radius_m: float | None = None
     max_rise_m: float = 0.10
     wall_run_m: float = 0.04
-    ground_radius_m: float = 0.10
     support_radius_m: float = 0.08
     max_unsupported: float = 0.4
     unsupported_cost: float = 6.0
@@ -78,14 +79,13 @@ class TraversabilityConfig:
         lengths = (
             self.max_rise_m,
             self.wall_run_m,
-            self.ground_radius_m,
             self.support_radius_m,
             self.clearance_m,
         )
         if not all(math.isfinite(v) and v > 0 for v in lengths):
             raise ConfigError(
-                "traversability lengths (max_rise_m, wall_run_m, ground_radius_m, "
-                "support_radius_m, clearance_m) must be positive"
+                "traversability lengths (max_rise_m, wall_run_m, support_radius_m, "
+                "clearance_m) must be positive"
             )
         if self.span_radius_m is not None and not (
             math.isfinite(self.span_radius_m) and self.span_radius_m > 0
@@ -165,6 +165,28 @@ def _disc_max(a: npt.NDArray[np.float64], radius_cells: int) -> npt.NDArray[np.f
     return out
 
 
+def _masked_median(
+    heights: npt.NDArray[np.float64], valid: npt.NDArray[np.bool_], half_cells: int
+) -> npt.NDArray[np.float64]:
+    """Median of the valid heights in the square of half-side ``half_cells`` around each cell.
+
+    Taken on every ``MEDIAN_STRIDE``-th cell along each axis (a rank filter over the whole
+    window costs a second on a 256 x 256 map). Cells that are not valid alternate between
+    +inf and -inf in a checkerboard: as many of each in a window leave its median that of
+    its valid cells (to within one rank). A window with no valid cells gives +-inf.
+    """
+    step = MEDIAN_STRIDE
+    sub = heights[::step, ::step]
+    i, j = np.indices(sub.shape)
+    filler = np.where((i + j) % 2 == 0, np.inf, -np.inf)
+    a = np.where(valid[::step, ::step], sub, filler)
+    # "mirror" reflects without repeating the edge, so the checkerboard keeps its parity.
+    size = 2 * max(1, round(half_cells / step)) + 1
+    median = ndimage.median_filter(a, size=size, mode="mirror")
+    full = np.repeat(np.repeat(median, step, axis=0), step, axis=1)
+    return full[: heights.shape[0], : heights.shape[1]]
+
+
 def _box_mean(
     a: npt.NDArray[np.float64], half_cells: int, outside: float
 ) -> npt.NDArray[np.float64]:
@@ -218,19 +240,16 @@ def cost_grid(
         held = np.isfinite(remembered_tops) & ~flat
         wall = wall | held
         top = np.where(held, np.fmax(heights, remembered_tops), heights)
-    valid_heights = np.where(valid, heights, -np.inf)
-    highest_near = ndimage.maximum_filter(
-        valid_heights, size=2 * cells(config.ground_radius_m) + 1, mode="nearest"
-    )
     span_cells = cells(span)
-    # The level the feet stand at: the mean valid height over the span, unless the
-    # ground right under the body is lower (a body over a small tall block stands on the
-    # floor its feet reach, not on the block).
+    # The level the feet stand at: the median valid height over the span. A body beside a
+    # trench, or over one, stands on the platforms its feet reach however much of the
+    # trench floor is seen; a body over a block smaller than its span stands on the floor
+    # around it, not on the block.
     weight = _box_mean(valid.astype(np.float64), span_cells, 0.0)
-    level = _box_mean(np.where(valid, heights, 0.0), span_cells, 0.0) / np.maximum(weight, 1e-12)
-    ground = np.where(weight > 0, np.minimum(highest_near, level), highest_near)
+    ground = _masked_median(heights, valid, span_cells)
+    ground[~(weight >= MIN_GROUND_SHARE) | ~np.isfinite(ground)] = -np.inf
     reach_top = _disc_max(np.where(wall, top, -np.inf), span_cells)
-    # A robot with no valid ground under it and a wall in reach is in the wall.
+    # A robot with no valid ground in its span and a wall in reach is in the wall.
     lethal = (reach_top > -np.inf) & ~(reach_top <= ground + 0.5 * config.max_rise_m)
 
     usable = valid & (heights >= ground - config.max_rise_m)
