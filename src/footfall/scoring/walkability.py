@@ -217,6 +217,49 @@ def shadowed_cells(
     return out
 
 
+def _side_bits(side: str) -> npt.NDArray[np.int64]:
+    """Bit numbers of the parts along one side of a cell: ``"-x"``, ``"+x"``, ``"-y"``, ``"+y"``."""
+    part = np.arange(SUB)
+    return {
+        "-x": part,
+        "+x": SUB * (SUB - 1) + part,
+        "-y": SUB * part,
+        "+y": SUB * part + SUB - 1,
+    }[side]
+
+
+def shadow_rims(
+    parts: npt.ArrayLike, points: npt.ArrayLike, known: npt.ArrayLike, config: ScoreConfig
+) -> npt.NDArray[np.bool_]:
+    """Slivers of a rim at the edge of a shadow: cells to score as unseen.
+
+    A camera looking over the near rim of a trench or a pit never sees the floor just past
+    it; the cell the rim ends in catches the rim's last millimetres on one side and nothing
+    on the other, and its height is the rim's: the map puts the edge up to a cell late.
+    Such a cell is known and well seen on one side (the neighbour there has caught at least
+    ``shadow_points``), yet half or more of its parts along the opposite side were never
+    hit and the neighbour across that side is unknown. Scored as unknown, it keeps the
+    kernel's band of invalid cells where the true edge puts it.
+    """
+    bits = np.asarray(parts, dtype=np.uint16)
+    seen = np.asarray(known, dtype=bool)
+    well_seen = np.asarray(points) >= config.shadow_points
+    full = (1 << (SUB * SUB)) - 1
+    missing = np.where(seen, ~bits & full, 0)
+
+    def open_side(side: str) -> npt.NDArray[np.bool_]:
+        never_hit = sum(((missing >> int(b)) & 1) for b in _side_bits(side))
+        return seen & (never_hit >= (SUB + 1) // 2)
+
+    out = np.zeros(seen.shape, dtype=bool)
+    # Open on +x: unknown beyond it along +x, well seen behind it along -x; and so on.
+    out[1:-1, :] |= open_side("+x")[1:-1, :] & ~seen[2:, :] & well_seen[:-2, :]
+    out[1:-1, :] |= open_side("-x")[1:-1, :] & ~seen[:-2, :] & well_seen[2:, :]
+    out[:, 1:-1] |= open_side("+y")[:, 1:-1] & ~seen[:, 2:] & well_seen[:, :-2]
+    out[:, 1:-1] |= open_side("-y")[:, 1:-1] & ~seen[:, :-2] & well_seen[:, 2:]
+    return out
+
+
 def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> ScoreMap:
     """Score a height-map snapshot.
 
@@ -224,16 +267,22 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
     neighbours: the edge may lie anywhere in it. Its height shows whichever side of the
     edge the last frame saw, so it is scored at the higher side (the highest of its
     neighbours): a foot nearby keeps its distance from the top of the edge. A cell partly
-    in a shadow (:func:`shadowed_cells`) is invalid too.
+    in a shadow (:func:`shadowed_cells`) is invalid too, and the sliver of a rim at a
+    shadow's edge (:func:`shadow_rims`) is scored as unseen.
     """
     c = config or ScoreConfig()
     sigma = None if snapshot.variance is None else np.sqrt(snapshot.variance)
-    slope, proximity, score, valid = score_heights(snapshot.heights, snapshot.resolution, c, sigma)
+    heights = snapshot.heights
+    if snapshot.parts is not None and snapshot.points is not None:
+        rims = shadow_rims(snapshot.parts, snapshot.points, np.isfinite(heights), c)
+        if rims.any():
+            heights = np.where(rims, np.nan, heights)
+    slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c, sigma)
     if snapshot.spread is None:
         return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)
     edge = edge_cells(snapshot.spread, slope, snapshot.resolution, c)
     if edge.any():
-        heights = snapshot.heights.copy()
+        heights = heights.copy()
         top = _around(np.nan_to_num(heights, nan=-np.inf), np.maximum)
         heights[edge] = top[edge]
         slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c, sigma)
