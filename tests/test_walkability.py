@@ -14,6 +14,7 @@ from footfall.scoring.walkability import (
     edge_cells,
     score_heights,
     score_map,
+    shadow_rims,
     shadowed_cells,
 )
 from footfall.sim.terrain import Course
@@ -175,3 +176,42 @@ def test_a_well_seen_cell_with_a_part_never_hit_is_shadowed_with_the_neighbour_b
     )
     valid = score_map(snapshot).valid
     assert not valid[4, 4] and not valid[3, 4] and valid[5, 4]
+
+
+@pytest.mark.parametrize(
+    "axis, towards, sliver_bits",
+    [(0, 1, 0x000F), (0, -1, 0xF000), (1, 1, 0x1111), (1, -1, 0x8888)],
+)
+def test_the_sliver_of_a_rim_before_a_shadow_is_unseen_and_the_edge_band_stands_true(
+    axis, towards, sliver_bits
+):
+    """A rim's last cell, hit only on the rim's side, with the shadow beyond it: it is scored
+    as unseen, so every cell within the kernel's half-width of the true edge is invalid, as
+    a perfect map would have it. A fully seen cell, a cell with the floor seen beyond it,
+    or one whose rim behind is barely seen, is left as it is."""
+    config = ScoreConfig()
+    n, edge, half = 20, 10, config.kernel_size // 2
+    index = np.arange(n)[:, None] * np.ones((1, n), int)  # cell index along the way
+
+    def oriented(a):
+        a = a if towards > 0 else a[::-1]
+        return a if axis == 0 else a.T
+
+    along = oriented(index)
+    heights = np.where(along > edge, np.nan, 0.0)  # the floor beyond the rim: never seen
+    sliver = along == edge
+    parts = np.where(along > edge, 0, np.where(sliver, sliver_bits, 0xFFFF)).astype(np.uint16)
+    points = np.where(along > edge, 0, np.where(sliver, 3, 5 * config.shadow_points))
+    known = np.isfinite(heights)
+    assert np.array_equal(shadow_rims(parts, points, known, config), sliver)
+    snapshot = MapSnapshot(heights, known, (0.0, 0.0), 0.02, parts=parts, points=points)
+    valid = score_map(snapshot).valid
+    inner = oriented(np.abs(index.T - n // 2) < n // 2 - half)  # away from the map's sides
+    assert not valid[(along >= edge - half) & (along <= edge)].any()
+    assert valid[(along == edge - half - 1) & inner].all()
+
+    full = np.where(sliver, 0xFFFF, parts).astype(np.uint16)
+    assert not shadow_rims(full, points, known, config).any()
+    barely = np.where(along == edge - 1, 1, points)
+    assert not shadow_rims(parts, barely, known, config).any()
+    assert not shadow_rims(parts, points, np.ones((n, n), bool), config).any()
