@@ -13,7 +13,10 @@ fell in it within one frame never spanned more than ``max_cell_spread`` in heigh
 straddling an edge, or a groove narrower than the grid, hides in its maximum but not in
 its spread), nor did those of its eight neighbours, and it is not partly in a shadow (a
 well-seen cell with a part no point ever hit: a groove narrower than the grid, seen at a
-grazing angle, hides behind its near edge, see :func:`shadowed_cells`). Defaults reproduce thesis
+grazing angle, hides behind its near edge, see :func:`shadowed_cells`). The last sliver of
+a rim before a shadow (the floor past a trench's near edge, which the camera never sees)
+counts as unseen (:func:`shadow_rims`), so the invalid band before the edge stands where
+the true edge puts it. Defaults reproduce thesis
 Figs. 6.6-6.8 on the course terrain: box tops, the ramp and the floor valid; box edges,
 the hole rim, the pillar's and the pedestal's sides invalid. The window (5 cells, 10 cm,
 sigma 2 cm) suits the default robot's 2.4 cm feet: the middle of a 9 cm cobblestone is
