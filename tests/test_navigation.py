@@ -15,6 +15,7 @@ from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
 
 from footfall.messages import GaitState, GaitStatus, MapUpdate, Mode, WalkCommand
 from footfall.nodes.navigation import NavigatorNode
+from footfall.planning import traversability
 from footfall.planning.navigation import NavigationConfig, NoRoute, Route, follow_route, plan_route
 from footfall.planning.route_kernels import dijkstra
 from footfall.planning.traversability import TraversabilityConfig, cost_grid, span_radius
@@ -93,6 +94,26 @@ def test_the_search_finds_the_least_route_cost_to_every_cell(seed, rows, cols, l
             flat, hops = int(parent.flat[flat]), hops + 1
             assert hops <= rows * cols
         assert flat == 0
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(1, 4), st.floats(0.05, 1.0))
+@settings(max_examples=40, deadline=None)
+def test_the_ground_median_is_that_of_the_valid_heights_in_the_window(seed, half_sub, share):
+    """Away from the map's sides, each cell's ground is the median of the valid heights on
+    the sampled cells of its window; a window with none valid is infinite."""
+    rng = np.random.default_rng(seed)
+    n, step = 40, traversability.MEDIAN_STRIDE
+    heights = rng.normal(0.0, 0.1, (n, n))
+    valid = rng.random((n, n)) < share
+    ground = traversability._masked_median(heights, valid, half_sub * step)
+    sub_h, sub_v = heights[::step, ::step], valid[::step, ::step]
+    for a in range(half_sub, sub_h.shape[0] - half_sub):
+        for b in range(half_sub, sub_h.shape[1] - half_sub):
+            window = np.s_[a - half_sub : a + half_sub + 1, b - half_sub : b + half_sub + 1]
+            v = sub_h[window][sub_v[window]]
+            g = ground[a * step : (a + 1) * step, b * step : (b + 1) * step]
+            expected = np.median(v) if v.size else np.inf
+            assert np.allclose(g, expected, rtol=0, atol=1e-12)
 
 
 def test_a_tall_box_is_lethal_within_the_legs_span_and_a_low_step_is_not():

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from numpy.lib.stride_tricks import sliding_window_view
 from scipy import ndimage
 
 from footfall.errors import ConfigError
@@ -170,19 +171,20 @@ def _masked_median(
 ) -> npt.NDArray[np.float64]:
     """Median of the valid heights in the square of half-side ``half_cells`` around each cell.
 
-    Taken on every ``MEDIAN_STRIDE``-th cell along each axis (a rank filter over the whole
-    window costs a second on a 256 x 256 map). Cells that are not valid alternate between
-    +inf and -inf in a checkerboard: as many of each in a window leave its median that of
-    its valid cells (to within one rank). A window with no valid cells gives +-inf.
+    Taken on every ``MEDIAN_STRIDE``-th cell along each axis (every cell of the window
+    costs a second on a 256 x 256 map), with the map's sides mirrored. Each window's
+    samples are sorted with the cells that are not valid last, and the middle of the valid
+    ones taken. A window with no valid cell gives +inf.
     """
     step = MEDIAN_STRIDE
-    sub = heights[::step, ::step]
-    i, j = np.indices(sub.shape)
-    filler = np.where((i + j) % 2 == 0, np.inf, -np.inf)
-    a = np.where(valid[::step, ::step], sub, filler)
-    # "mirror" reflects without repeating the edge, so the checkerboard keeps its parity.
-    size = 2 * max(1, round(half_cells / step)) + 1
-    median = ndimage.median_filter(a, size=size, mode="mirror")
+    half = max(1, round(half_cells / step))
+    sub = np.where(valid[::step, ::step], heights[::step, ::step], np.inf)
+    windows = sliding_window_view(np.pad(sub, half, mode="reflect"), (2 * half + 1,) * 2)
+    ordered = np.sort(windows.reshape(*sub.shape, -1), axis=-1)
+    count = np.isfinite(ordered).sum(axis=-1)
+    low = np.take_along_axis(ordered, np.maximum(count - 1, 0)[..., None] // 2, axis=-1)
+    high = np.take_along_axis(ordered, (count // 2)[..., None], axis=-1)
+    median = np.where(count > 0, 0.5 * (low[..., 0] + high[..., 0]), np.inf)
     full = np.repeat(np.repeat(median, step, axis=0), step, axis=1)
     return full[: heights.shape[0], : heights.shape[1]]
 
