@@ -55,7 +55,8 @@ def plot_biped_top(walk, path: Path) -> Path:
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
+    # beside the axes: inside, a long straight walk leaves it no free corner
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8)
     state = "reached the goal" if walk.reached_goal else ("fell" if walk.fell else "stopped")
     ax.set_title(f"{walk.name}: {state}, {walk.collisions} collisions")
     return save_figure(fig, path)
