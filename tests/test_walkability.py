@@ -188,7 +188,8 @@ def test_the_sliver_of_a_rim_before_a_shadow_is_unseen_and_the_edge_band_stands_
     """A rim's last cell, hit only on the rim's side, with the shadow beyond it: it is scored
     as unseen, so every cell within the kernel's half-width of the true edge is invalid, as
     a perfect map would have it. A fully seen cell, a cell with the floor seen beyond it,
-    or one whose rim behind is barely seen, is left as it is."""
+    one whose rim behind is barely seen, or one before a shadow shorter than
+    ``shadow_rim_cells`` (a groove between stones), is left as it is."""
     config = ScoreConfig()
     n, edge, half = 20, 10, config.kernel_size // 2
     index = np.arange(n)[:, None] * np.ones((1, n), int)  # cell index along the way
@@ -215,3 +216,8 @@ def test_the_sliver_of_a_rim_before_a_shadow_is_unseen_and_the_edge_band_stands_
     barely = np.where(along == edge - 1, 1, points)
     assert not shadow_rims(parts, barely, known, config).any()
     assert not shadow_rims(parts, points, np.ones((n, n), bool), config).any()
+    run = config.shadow_rim_cells
+    long_enough = known | (along > edge + run)  # ground seen again past the shadow
+    assert np.array_equal(shadow_rims(parts, points, long_enough, config), sliver)
+    short = known | (along >= edge + run)
+    assert not shadow_rims(parts, points, short, config).any()

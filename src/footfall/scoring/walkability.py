@@ -58,6 +58,11 @@ class ScoreConfig:
             (one of its 4 x 4) never hit lies partly in a shadow, and is invalid: a groove
             too narrow for the grid, seen at a grazing angle, hides behind its near edge.
             Fewer points than this may miss a part by chance.
+        shadow_rim_cells: The sliver of a rim before a shadow (:func:`shadow_rims`) is
+            scored unseen only when at least this many cells beyond it are unknown. Seen
+            from above at 45 degrees or lower, a drop casts a shadow at least as long as it
+            is deep; a shorter shadow hides a shallow drop (a groove between cobblestones),
+            whose one-cell edge band the scorer already keeps, or a gap narrower than it.
     """
 
     slope_weight: float = 1.0
@@ -68,6 +73,7 @@ class ScoreConfig:
     max_cell_spread: float = 0.002
     noise_sigmas: float = 2.5
     shadow_points: int = 48
+    shadow_rim_cells: int = 3
 
     def __post_init__(self) -> None:
         if self.kernel_size < 3 or self.kernel_size % 2 == 0:
@@ -78,6 +84,8 @@ class ScoreConfig:
             raise ConfigError("score weights must be >= 0")
         if self.shadow_points < 1:
             raise ConfigError(f"shadow_points must be >= 1, got {self.shadow_points}")
+        if self.shadow_rim_cells < 1:
+            raise ConfigError(f"shadow_rim_cells must be >= 1, got {self.shadow_rim_cells}")
 
     @property
     def kernel_1d(self) -> npt.NDArray[np.float64]:
@@ -241,25 +249,46 @@ def shadow_rims(
     on the other, and its height is the rim's: the map puts the edge up to a cell late.
     Such a cell is known and well seen on one side (the neighbour there has caught at least
     ``shadow_points``), yet half or more of its parts along the opposite side were never
-    hit and the neighbour across that side is unknown. Scored as unknown, it keeps the
-    kernel's band of invalid cells where the true edge puts it.
+    hit and at least ``shadow_rim_cells`` cells across that side are unknown (beyond the
+    window counts as unknown). Scored as unknown, it keeps the kernel's band of invalid
+    cells where the true edge puts it.
     """
     bits = np.asarray(parts, dtype=np.uint16)
     seen = np.asarray(known, dtype=bool)
     well_seen = np.asarray(points) >= config.shadow_points
     full = (1 << (SUB * SUB)) - 1
     missing = np.where(seen, ~bits & full, 0)
+    opposite = {"+x": "-x", "-x": "+x", "+y": "-y", "-y": "+y"}
 
     def open_side(side: str) -> npt.NDArray[np.bool_]:
         never_hit = sum(((missing >> int(b)) & 1) for b in _side_bits(side))
         return seen & (never_hit >= (SUB + 1) // 2)
 
     out = np.zeros(seen.shape, dtype=bool)
-    # Open on +x: unknown beyond it along +x, well seen behind it along -x; and so on.
-    out[1:-1, :] |= open_side("+x")[1:-1, :] & ~seen[2:, :] & well_seen[:-2, :]
-    out[1:-1, :] |= open_side("-x")[1:-1, :] & ~seen[:-2, :] & well_seen[2:, :]
-    out[:, 1:-1] |= open_side("+y")[:, 1:-1] & ~seen[:, 2:] & well_seen[:, :-2]
-    out[:, 1:-1] |= open_side("-y")[:, 1:-1] & ~seen[:, :-2] & well_seen[:, 2:]
+    for side in opposite:  # open on +x: a shadow beyond along +x, well seen behind; ...
+        shadow = np.logical_and.reduce(
+            [_across(~seen, side, d, True) for d in range(1, config.shadow_rim_cells + 1)]
+        )
+        out |= open_side(side) & shadow & _across(well_seen, opposite[side], 1, False)
+    return out
+
+
+def _across(a: npt.NDArray[np.bool_], side: str, cells: int, beyond: bool) -> npt.NDArray[np.bool_]:
+    """For each cell, the value of ``a`` that many ``cells`` across its ``side`` (``+x``,
+    ``-x``, ``+y``, ``-y``); ``beyond`` where that lies outside the window.
+    """
+    axis = 0 if side[1] == "x" else 1
+    out = np.full(a.shape, beyond)
+    n = a.shape[axis]
+    if cells >= n:
+        return out
+    src = [slice(None), slice(None)]
+    dst = [slice(None), slice(None)]
+    if side[0] == "+":
+        src[axis], dst[axis] = slice(cells, n), slice(0, n - cells)
+    else:
+        src[axis], dst[axis] = slice(0, n - cells), slice(cells, n)
+    out[tuple(dst)] = a[tuple(src)]
     return out
 
 
