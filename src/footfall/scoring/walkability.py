@@ -274,8 +274,9 @@ def shadow_rims(
 
 
 def _across(a: npt.NDArray[np.bool_], side: str, cells: int, beyond: bool) -> npt.NDArray[np.bool_]:
-    """For each cell, the value of ``a`` that many ``cells`` across its ``side`` (``+x``,
-    ``-x``, ``+y``, ``-y``); ``beyond`` where that lies outside the window.
+    """For each cell, the value of ``a`` that many ``cells`` across its ``side``.
+
+    ``side`` is ``+x``, ``-x``, ``+y`` or ``-y``; ``beyond`` where that lies outside the window.
     """
     axis = 0 if side[1] == "x" else 1
     out = np.full(a.shape, beyond)
