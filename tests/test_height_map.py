@@ -197,3 +197,52 @@ def test_variance_fusion_averages_noise_and_follows_changes():
     assert abs(m.height_at([[0.05, 0.05]])[0] - 0.2) < 0.003
     m.integrate_points([[0.05, 0.05, 0.6]], [0.05, 0.05, 1.6])
     assert m.height_at([[0.05, 0.05]])[0] == pytest.approx(0.6)
+
+
+def _floor_with_pit(rim_x: float | None):
+    """A depth frame of a floor at z = 0 that drops 0.3 m past ``rim_x`` (None: no drop)."""
+    _, camera, pose = synthetic_depth_frame(np.random.default_rng(0))
+    u = np.arange(camera.width) - camera.cx
+    v = np.arange(camera.height)[:, None] - camera.cy
+    rays = np.stack(
+        [u / camera.fx + 0 * v, v / camera.fy + 0 * u, np.ones((camera.height, camera.width))], -1
+    )
+    down = np.minimum((rays @ pose.rotation.as_matrix().T)[..., 2], -1e-9)
+    depth = -pose.position[2] / down  # along the optical axis: rays have z = 1 in the camera
+    if rim_x is not None:
+        x_floor = pose.position[0] + depth * (rays @ pose.rotation.as_matrix().T)[..., 0]
+        depth = np.where(x_floor >= rim_x, (-0.3 - pose.position[2]) / down, depth)
+    depth[depth > camera.max_range] = 0.0
+    return depth.astype(np.float32), camera, pose
+
+
+@pytest.mark.parametrize("rim_x", [0.35, 0.45, None])
+def test_assumed_ground_the_camera_sees_through_is_erased(rim_x):
+    """A disc of ground assumed round the standing robot that reaches past a pit's rim loses
+    the cells past the rim once a frame sees through them; the cells under the robot, which
+    the camera never sees, stay assumed; those it sees on the floor are confirmed; a cell
+    known before is not overwritten by the assumption."""
+    config = HeightMapConfig(size=128, resolution=0.02)
+    m = HeightMap(config, centre=(0.0, 0.0))
+    m.integrate_points(np.array([[0.51, 0.01, 0.05]]), np.array([0.0, 0.0, 0.3]))
+    r = np.arange(-0.6, 0.61, 0.01)
+    gx, gy = np.meshgrid(r, r)
+    disc = np.hypot(gx, gy) <= 0.6
+    m.assume_ground(np.column_stack([gx[disc], gy[disc], np.zeros(disc.sum())]), (0, 0, 0.3))
+    assert m.height_at([0.51, 0.01]) == pytest.approx(0.05)
+    assert np.isfinite(m.height_at([[0.55, 0.0], [0.0, 0.0], [0.3, 0.0]])).all()
+    m.integrate_depth(*_floor_with_pit(rim_x))
+
+    xs = np.arange(-0.55, 0.56, 0.02) + 0.01
+    along = np.column_stack([xs, np.full(len(xs), 0.05)])
+    h = m.height_at(along)
+    under = xs < 0.1  # the camera's view starts 0.15 m ahead
+    assert np.isfinite(h[under]).all()
+    i, j = m.buffer_index(m.cell_of(along[under])).T
+    assert m.assumed[i, j].all()
+    seen_floor = (xs > 0.2) & (xs < (rim_x if rim_x is not None else 1.0) - 0.02)
+    assert np.isfinite(h[seen_floor]).all()
+    i, j = m.buffer_index(m.cell_of(along[seen_floor])).T
+    assert not m.assumed[i, j].any()
+    if rim_x is not None:
+        assert np.isnan(h[xs > rim_x + 0.02]).all()

@@ -67,6 +67,10 @@ _RULE_CODES = {
 }
 
 
+# An assumed cell (:meth:`HeightMap.assume_ground`) is contradicted when the camera's
+# reading through its centre lies this much beyond it, plus three standard deviations of
+# the camera's noise there [m].
+SEE_THROUGH_M = 0.02
 # The largest world coordinate a map window may be centred on [m] (cell indices stay exact).
 MAX_COORDINATE = 1e7
 # A cell's height difference counts at most this much in a frame's misfit [m].
@@ -233,6 +237,7 @@ class HeightMap:
         self.spread = np.zeros((n, n), dtype=np.float64)
         self.parts = np.zeros((n, n), dtype=np.uint16)
         self.points = np.zeros((n, n), dtype=np.int64)
+        self.assumed = np.zeros((n, n), dtype=bool)
         self._frame_h = np.zeros((n, n), dtype=np.float64)
         self._frame_lo = np.zeros((n, n), dtype=np.float64)
         self._frame_r2 = np.zeros((n, n), dtype=np.float64)
@@ -297,6 +302,7 @@ class HeightMap:
                 continue
             if abs(shift) >= n:
                 self.known[:] = False
+                self.assumed[:] = False
                 break
             if shift > 0:  # cells [origin, origin + shift) leave
                 leaving = np.arange(self.origin[axis], self.origin[axis] + shift)
@@ -305,8 +311,10 @@ class HeightMap:
             rows = np.mod(leaving, n)
             if axis == 0:
                 self.known[rows, :] = False
+                self.assumed[rows, :] = False
             else:
                 self.known[:, rows] = False
+                self.assumed[:, rows] = False
         self.origin = new_origin
 
     # Integration -----------------------------------------------------------------------
@@ -397,6 +405,8 @@ class HeightMap:
                     vertical_offset_m=registration.measured_m,
                     inconsistent=True,
                 )
+        if self.assumed.any():
+            self._check_assumed(n_touched, depth, camera, camera_pose, depth_scale)
         self._fuse(
             n_touched,
             camera.noise,
@@ -406,6 +416,64 @@ class HeightMap:
         if registration is None:
             return stats
         return replace(stats, vertical_offset_m=registration.offset_m, settled=registration.settled)
+
+    def assume_ground(
+        self, points_in_world: npt.ArrayLike, sensor_position: npt.ArrayLike
+    ) -> IntegrationStats:
+        """Take ground the robot knows without seeing it (under its feet) into unknown cells.
+
+        The cells this fills are *assumed*: the first depth frame whose point falls in one
+        confirms it, and a frame that sees through one (its reading along the ray through
+        the cell's centre lies beyond it: the floor past a pit's rim the robot stands at)
+        erases it. Cells known already keep what they hold.
+        """
+        p = np.ascontiguousarray(points_in_world, dtype=np.float64)
+        if p.ndim != 2 or p.shape[1] != 3:
+            raise ConfigError(f"points must have shape (n, 3), got {p.shape}")
+        cells = self.cell_of(p[:, :2])
+        inside = self.contains(cells)
+        idx = self.buffer_index(cells[inside])
+        fresh = ~self.known[idx[:, 0], idx[:, 1]]
+        stats = self.integrate_points(p[inside][fresh], sensor_position)
+        i, j = idx[fresh, 0], idx[fresh, 1]
+        self.assumed[i, j] = self.known[i, j]
+        return stats
+
+    def _check_assumed(
+        self,
+        n_touched: int,
+        depth: npt.ArrayLike,
+        camera: PinholeCamera,
+        camera_pose: Pose,
+        depth_scale: float | None,
+    ) -> None:
+        """Confirm the assumed cells a binned frame hits; erase those it sees through."""
+        n = self.config.size
+        idx = self._touched[:n_touched]
+        self.assumed.flat[idx] = False
+        i, j = np.nonzero(self.assumed)
+        if not len(i):
+            return
+        global_cell = self.origin + np.mod(np.column_stack([i, j]) - self.origin % n, n)
+        centre = np.column_stack([self.centre_of(global_cell), self.heights[i, j]])
+        in_camera = camera_pose.rotation.inv().apply(centre - camera_pose.position)
+        z = in_camera[:, 2]
+        ahead = z > camera.min_range
+        u = np.full(len(z), -1, dtype=np.int64)
+        v = np.full(len(z), -1, dtype=np.int64)
+        u[ahead] = np.round(camera.fx * in_camera[ahead, 0] / z[ahead] + camera.cx)
+        v[ahead] = np.round(camera.fy * in_camera[ahead, 1] / z[ahead] + camera.cy)
+        seen = ahead & (u >= 0) & (u < camera.width) & (v >= 0) & (v < camera.height)
+        if not seen.any():
+            return
+        d = camera.depth_in_metres(depth, depth_scale)
+        reading = d[v[seen], u[seen]].astype(np.float64) * camera.scale_for(d, depth_scale)
+        valid = np.isfinite(reading) & (reading > camera.min_range) & (reading <= camera.max_range)
+        sigma = np.array([camera.noise.sigma_m(float(r)) for r in z[seen]])
+        beyond = valid & (reading > z[seen] + SEE_THROUGH_M + 3.0 * sigma)
+        gone_i, gone_j = i[seen][beyond], j[seen][beyond]
+        self.known[gone_i, gone_j] = False
+        self.assumed[gone_i, gone_j] = False
 
     def _bin(
         self,

@@ -177,7 +177,8 @@ class MappingNode:
         """Mark a disc around the standing robot as known ground (a proprioceptive prior).
 
         The camera looks ahead and never sees under or beside the robot, where its first
-        steps land; cells the camera sees replace these.
+        steps land; cells the camera sees replace these, and a disc reaching past a pit's
+        rim loses the cells the camera sees through (:meth:`HeightMap.assume_ground`).
         """
         res = self.height_map.config.resolution
         offsets = np.arange(-prior.radius, prior.radius + res, res)
@@ -186,7 +187,7 @@ class MappingNode:
         body = np.asarray(prior.body_position_in_world, dtype=np.float64)
         xy = body[:2] + np.stack([gx[inside], gy[inside]], axis=1)
         points = np.column_stack([xy, np.full(len(xy), prior.ground_z)])
-        self.height_map.integrate_points(points, body)
+        self.height_map.assume_ground(points, body)
 
     def _skip(self, frame: DepthFrame, why: str, count: bool = True) -> None:
         if count:
