@@ -469,7 +469,7 @@ class HeightMap:
         d = camera.depth_in_metres(depth, depth_scale)
         reading = d[v[seen], u[seen]].astype(np.float64) * camera.scale_for(d, depth_scale)
         valid = np.isfinite(reading) & (reading > camera.min_range) & (reading <= camera.max_range)
-        sigma = np.array([camera.noise.sigma_m(float(r)) for r in z[seen]])
+        sigma = camera.noise.sigma_m(z[seen])  # elementwise on the ranges
         beyond = valid & (reading > z[seen] + SEE_THROUGH_M + 3.0 * sigma)
         gone_i, gone_j = i[seen][beyond], j[seen][beyond]
         self.known[gone_i, gone_j] = False
