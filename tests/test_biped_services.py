@@ -93,12 +93,12 @@ def test_the_biped_station_plans_to_a_clicked_goal_and_draws_the_plan():
                 station.set_goal((4.0, 0.0))  # what a click on the ground does
                 assert "start_planning done" in station.biped_text.content
                 end = time.monotonic() + 5.0
-                while station.plan is None and time.monotonic() < end:
+                while station.robot.plan is None and time.monotonic() < end:
                     station.step()
                     bus.spin(0.05)
-                assert station.obstacles is not None and station.plan is not None
-                station._draw(time.monotonic())  # obstacles, path, footsteps, COM
-                assert station.plan.collisions == 0
+                assert station.robot.obstacles is not None and station.robot.plan is not None
+                station.draw(time.monotonic())  # obstacles, path, footsteps, COM
+                assert station.robot.plan.collisions == 0
             finally:
                 station.close()
     finally:

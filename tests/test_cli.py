@@ -194,10 +194,9 @@ def test_bench_terrain_writes_its_table_and_chart(tmp_path, monkeypatch, capsys)
     """`footfall bench terrain` writes bench.json (per configuration and mode, and the
     overall rates of each mode) and bench.png for the terrains asked for; walks run in
     parallel processes with --jobs give the same outcomes; an unknown terrain is named."""
-    import footfall.benchmarking
+    from footfall.sim.terrain import Stairs
 
-    sweep = (("stairs", "rise", (0.04,)), ("dead_end", "length", (1.8,)), ("gaps", "width", (0.1,)))
-    monkeypatch.setattr(footfall.benchmarking, "TERRAIN_SWEEP", sweep)
+    monkeypatch.setattr(Stairs, "sweep", (0.04,))
     outs = []
     for jobs in ("1", "2"):
         out = tmp_path / f"jobs{jobs}"

@@ -16,7 +16,8 @@ from footfall.cli import main
 from footfall.control_loop import WalkLog
 from footfall.errors import ConfigError
 from footfall.mapping.drift import DriftConfig
-from footfall.mapping.height_map import HeightMap, HeightMapConfig
+from footfall.mapping.engine import HeightMapConfig
+from footfall.mapping.height_map import HeightMap
 from footfall.messages import DepthFrame, GaitStatus, MapUpdate, PoseEstimate, RobotState
 from footfall.nodes.mapping import MappingNode
 from footfall.nodes.pose_guard import PoseGuardNode
@@ -24,7 +25,7 @@ from footfall.reliability.faults_bench import faulty_walk
 from footfall.robot.planar import PlanarPose
 from footfall.runtime.bus import InProcessBus
 from footfall.runtime.fault_spec import FaultSpec, PoseJump
-from footfall.runtime.faults import RAW_POSE_TOPIC, FaultyLink
+from footfall.runtime.faults import FaultyLink
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
 
@@ -119,7 +120,7 @@ class Tap:
         self.poses: list[PoseEstimate] = []
         self.sensor_side: list[DepthFrame] = []
         self.bus.subscribe(DepthFrame.TOPIC, self.frames.append)
-        self.bus.subscribe(RAW_POSE_TOPIC, self.poses.append)
+        self.bus.subscribe(PoseEstimate.RAW_TOPIC, self.poses.append)
         self.link.subscribe(DepthFrame.TOPIC, self.sensor_side.append)
 
     def send(self, n: int, rate_hz: float = 15.0):
@@ -130,7 +131,7 @@ class Tap:
             pose = camera_over_floor(0.1 * t)
             depth = np.full((6, 8), 1.0 + k, np.float32)
             self.link.publish(DepthFrame.TOPIC, DepthFrame(t, depth, CAMERA, pose, sequence=k))
-            self.link.publish(RAW_POSE_TOPIC, PoseEstimate(t, pose, pose))
+            self.link.publish(PoseEstimate.RAW_TOPIC, PoseEstimate(t, pose, pose))
 
 
 @given(drop=st.floats(0.05, 0.6), seed=st.integers(0, 10_000))
@@ -240,7 +241,7 @@ class Guarded:
             elif jitter_rad:
                 turn = Rotation.from_euler("z", rng.normal(0.0, jitter_rad))
                 raw = Pose(raw.position + rng.normal(0.0, jitter_m, 3), turn * raw.rotation)
-            self.bus.publish(RAW_POSE_TOPIC, PoseEstimate(t, raw, raw))
+            self.bus.publish(PoseEstimate.RAW_TOPIC, PoseEstimate(t, raw, raw))
 
 
 def _status(t: float, pose: PlanarPose) -> GaitStatus:
@@ -330,7 +331,9 @@ class MappedGuard(Guarded):
         image = blocks_depth(camera_over_floor(body_x))
         self.bus.publish(DepthFrame.TOPIC, DepthFrame(t, image, CAMERA, Pose.identity()))
         body = Pose(np.array([estimate_x, 0.0, 0.2]), Rotation.identity())
-        self.bus.publish(RAW_POSE_TOPIC, PoseEstimate(t, camera_over_floor(estimate_x), body))
+        self.bus.publish(
+            PoseEstimate.RAW_TOPIC, PoseEstimate(t, camera_over_floor(estimate_x), body)
+        )
 
 
 @pytest.mark.parametrize("slip", [True, False], ids=["the-robot-slipped", "the-estimate-jumped"])
@@ -431,7 +434,7 @@ def test_walk_log_rings_keep_the_latest_rows():
 # Walks through faults --------------------------------------------------------------------
 def test_a_pose_jump_on_cobblestones_is_caught_and_the_robot_gets_across():
     """The issue's case: a 10 cm / 5 degree jump at 8 s used to put 21 feet on invalid cells."""
-    m = faulty_walk("cobblestones", "jump=0.1:5@8", seed=2).metrics
+    m = faulty_walk("cobblestones", "jump=0.1:5@8", seed=2).metrics.to_json()
     assert m["pose_jumps_detected"] == 1 and m["faults"]["jumps"] == 1
     assert m["reached_goal"] and not m["fell"] and m["invalid_footholds"] == 0
 
@@ -441,14 +444,14 @@ def test_a_foot_retargeted_as_it_lands_is_not_dragged_and_a_slip_is_not_a_jump()
     foot's target 14 cm as it was landing; the stance foot used to be dragged there, the
     body lurched, the guard took the true estimate for a jump and the map went out of
     register (8 invalid footholds, frozen). Now the step waits for the foot."""
-    m = faulty_walk("cobblestones", "drop=0.3", seed=4).metrics
+    m = faulty_walk("cobblestones", "drop=0.3", seed=4).metrics.to_json()
     assert m["reached_goal"] and not m["fell"] and m["invalid_footholds"] == 0
     assert m["stance_slip_max_m"] < 0.01 and m["frames_inconsistent"] == 0
 
 
 def test_a_robot_that_loses_its_pose_stands_still_then_walks_on():
     result = faulty_walk("flat", "pose_loss=2.0@4", seconds=14.0)
-    m, log = result.metrics, result.log
+    m, log = result.metrics.to_json(), result.log
     assert m["stale_stops"] >= 1 and not m["fell"] and m["invalid_footholds"] == 0
     t = log.array("time")
     x = log.array("body_position_in_world")[:, 0]

@@ -20,7 +20,9 @@ from scipy.spatial.transform import Rotation
 from footfall.biped.maps import load_map, map_from_dict
 from footfall.biped.planner import plan_walk
 from footfall.errors import FootfallError
-from footfall.mapping.height_map import HeightMap, HeightMapConfig, MapSnapshot
+from footfall.mapping.engine import HeightMapConfig
+from footfall.mapping.height_map import HeightMap
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.messages import DepthFrame, PoseEstimate, WalkCommand
 from footfall.messages.codec import decode
 from footfall.planning.footholds import FootholdConfig, FootholdSearch

@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from footfall.benchmarking import synthetic_depth_frame
-from footfall.mapping.height_map import HeightMap, HeightMapConfig
+from footfall.mapping.engine import HeightMapConfig
+from footfall.mapping.height_map import HeightMap
 from footfall.mapping.reference import integrate_depth_latest
 
 coordinates = st.floats(-500.0, 500.0, allow_nan=False)

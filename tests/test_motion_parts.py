@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from footfall.errors import UnreachableTargetError
-from footfall.mapping.height_map import MapSnapshot
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.messages import RobotState, WalkCommand
 from footfall.motion.command_shaping import CommandShaper
 from footfall.motion.feedback import BodyFeedback, FeedbackConfig

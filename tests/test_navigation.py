@@ -317,9 +317,9 @@ def test_a_walker_stuck_where_a_foot_has_not_looked_turns_to_look_once():
         status = _frozen(t, pose, "RM") if frozen else _status(t, pose)
         command = navigator.command(t, status, base)
         t += 0.05
-    assert navigator.looks == 1
+    assert navigator.stuck.looks == 1
     assert any("RM has not seen where it steps" in line.text for line in logs)
-    place = navigator._looked[0]
+    place = navigator.stuck.looked[0]
     assert place[1] < -0.1  # the right middle foot's place, on the unseen side
     facing = math.atan2(place[1] - pose.y, place[0] - pose.x)
     assert command.speed == 0.0 and command.yaw_rate < 0.0  # turning right, on the spot
@@ -334,7 +334,7 @@ def test_a_walker_stuck_where_a_foot_has_not_looked_turns_to_look_once():
     for _ in range(30):
         command = navigator.command(t, _frozen(t, pose, "RM"), base)
         t += 0.05
-    assert navigator.looks == 1 and navigator.blocked_count == 1
+    assert navigator.stuck.looks == 1 and navigator.stuck.blocked_count == 1
     navigator.close()
 
 

@@ -212,7 +212,8 @@ def test_a_recorded_sequence_and_a_simulated_walk_map_through_the_same_node(
 ):
     """`map_tum_sequence` and `simulate_walk` both integrate every frame in MappingNode."""
     from footfall.datasets.tum import map_tum_sequence
-    from footfall.sim.walk import WalkSettings, simulate_walk
+    from footfall.sim.walk import simulate_walk
+    from footfall.sim.walk_settings import WalkSettings
 
     calls = []
     integrate = mapping_module.MappingNode._integrate
@@ -232,7 +233,8 @@ def test_a_recorded_sequence_and_a_simulated_walk_map_through_the_same_node(
     recorded = map_tum_sequence(tmp_path, CAMERA, up=(0.0, 0.0, 1.0))
     assert len(calls) == recorded.metrics["frames"] == 3
     walk = simulate_walk(default_spec, WalkSettings(terrain="flat", seconds=0.5, blind=False))
-    assert len(calls) == 3 + walk.metrics["frames"] and walk.metrics["frames"] >= 8
+    frames = walk.metrics.mapping.frames
+    assert len(calls) == 3 + frames and frames >= 8
 
 
 def test_wall_clock_scheduler_keeps_deadlines_and_counts_overruns():

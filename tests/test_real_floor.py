@@ -16,7 +16,8 @@ import pytest
 
 from conftest import shared_data
 from footfall.cli import main
-from footfall.mapping.height_map import HeightMap, HeightMapConfig
+from footfall.mapping.engine import HeightMapConfig
+from footfall.mapping.height_map import HeightMap
 from footfall.pointcloud.ground import CameraOverFloor
 from footfall.scoring.walkability import score_map
 from footfall.sensing.camera import PinholeCamera

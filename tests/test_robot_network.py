@@ -25,7 +25,7 @@ from footfall.messages import (
 )
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
 from footfall.sim.task import TerrainTask
-from footfall.sim.terrain import make_terrain
+from footfall.sim.terrains import make_terrain
 from test_zenoh_bus import free_port
 
 

@@ -98,7 +98,7 @@ def test_the_station_walks_to_a_clicked_goal_and_beats_its_heart():
         station = Station(bus, port=free_port())
         try:
             facing_left = PlanarPose(0.0, 0.0, math.pi / 2)
-            station.status = GaitStatus(
+            station.robot.status = GaitStatus(
                 0.0, Mode.WALKING, GaitState.REST, "", "", facing_left, 0.09, 0, 0, 0.0
             )
             station.set_goal((1.0, 0.0))
@@ -106,7 +106,7 @@ def test_the_station_walks_to_a_clicked_goal_and_beats_its_heart():
             assert command.speed > 0
             assert command.direction[0] == pytest.approx(0.0, abs=1e-9)
             assert command.direction[1] == pytest.approx(-1.0)  # the goal is on its right
-            station.status = GaitStatus(
+            station.robot.status = GaitStatus(
                 1.0, Mode.WALKING, GaitState.REST, "", "", PlanarPose(0.95, 0.0), 0.09, 0, 0, 0.0
             )
             assert station.command().speed == 0.0 and station.goal is None
@@ -174,10 +174,10 @@ def test_a_clicked_goal_is_walked_to_round_a_wall_on_the_robots_map():
     with ZenohBus(ZenohConfig()) as bus:
         station = Station(bus, port=free_port())
         try:
-            station.status = status
+            station.robot.status = status
             bus.publish(MapUpdate.TOPIC, _walled_map(1))
             end = time.monotonic() + 10.0
-            while station.map is None and time.monotonic() < end:
+            while station.robot.map is None and time.monotonic() < end:
                 bus.spin(0.05)
             station.set_goal((1.5, 0.0))
             command = command_once_planned(station, time.monotonic() + 10.0)
@@ -199,8 +199,8 @@ def test_a_clicked_goal_is_walked_to_round_a_wall_on_the_robots_map():
                 command = station.command()
                 time.sleep(0.1)
             assert station.navigator.no_route is not None and command.speed == 0.0
-            station._draw(time.monotonic())
-            assert "standing still" in station.status_text.content
+            station.draw(time.monotonic())
+            assert "standing still" in station.page.status_text.content
         finally:
             station.close()
 

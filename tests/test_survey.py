@@ -12,7 +12,7 @@ from footfall.sim.camera import SimDepthCamera
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import CameraMount
 from footfall.sim.survey import MappingSettings, simulate_mapping, vertical_edge_cells
-from footfall.sim.terrain import make_terrain
+from footfall.sim.terrains import make_terrain
 from footfall.sim.truth import TrueScores
 
 SPEC = load_spec("default")

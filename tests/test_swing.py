@@ -8,16 +8,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from footfall.errors import ConfigError
-from footfall.motion.swing import (
+from footfall.motion.flow_swing import (
     FlowConfig,
     FlowSwing,
-    PolynomialArcSwing,
     cap_height,
     integrate_flow,
-    minimum_jerk,
-    polynomial_arc_coefficients,
     sigmoid_like,
 )
+from footfall.motion.swing import minimum_jerk
+from footfall.motion.swing_polynomial import PolynomialArcSwing, polynomial_arc_coefficients
 
 THESIS = FlowConfig(step_height=2.0, rise=14.0)  # §8.1: Ch = 2.0, q = 14
 STRIDE = 0.15

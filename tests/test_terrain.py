@@ -10,7 +10,8 @@ from footfall.errors import ConfigError
 from footfall.robot.spec import load_spec
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import ROBOT_GEOM_GROUP
-from footfall.sim.terrain import TERRAIN_NAMES, Cobblestones, Stairs, make_terrain
+from footfall.sim.terrain import Cobblestones, Stairs
+from footfall.sim.terrains import TERRAINS, make_terrain
 
 
 def _ray_heights(sim: MujocoHexapod, xy: np.ndarray) -> np.ndarray:
@@ -34,7 +35,7 @@ def _ray_heights(sim: MujocoHexapod, xy: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
-@pytest.mark.parametrize("name", TERRAIN_NAMES)
+@pytest.mark.parametrize("name", TERRAINS.names())
 def test_simulated_ground_matches_ground_truth(name):
     """Away from walls the simulated surface is the terrain's height function (to 2 mm)."""
     terrain = make_terrain(name, seed=4)

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from footfall.mapping.height_map import MapSnapshot
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.planning.terrain_planner import NoFoothold, StepPoses, TerrainPlanner
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose

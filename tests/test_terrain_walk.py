@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -10,8 +11,10 @@ import pytest
 
 from footfall.messages import WalkCommand
 from footfall.robot.spec import load_spec
-from footfall.sim.terrain import Terrain, TerrainXml, make_terrain
-from footfall.sim.walk import WalkSettings, simulate_walk
+from footfall.sim.terrain import Terrain, TerrainXml
+from footfall.sim.terrains import make_terrain
+from footfall.sim.walk import simulate_walk
+from footfall.sim.walk_settings import WalkSettings
 
 SPEC = load_spec("default")
 
@@ -30,7 +33,7 @@ def stairs_walk():
 
 def test_planned_walk_climbs_and_descends_the_staircase(stairs_walk):
     """4 steps of 4 cm up and down: goal reached, no fall, no invalid foothold, tilt < 2 deg."""
-    m = stairs_walk.metrics
+    m = stairs_walk.metrics.to_json()
     assert m["reached_goal"] and not m["fell"] and not m["frozen"], m["frozen_reason"]
     assert m["invalid_footholds"] == 0
     assert m["tilt_max_deg"] < 2.0
@@ -48,7 +51,7 @@ def test_body_rises_with_the_stairs_in_small_steps(stairs_walk):
 def test_footholds_land_where_planned(stairs_walk):
     """Every planned foothold is on a cell the robot's map scored valid (checked via the
     ground truth): none of the chosen footholds is on an invalid true cell."""
-    assert stairs_walk.metrics["touchdowns"] > 60
+    assert stairs_walk.metrics.footholds.touchdowns > 60
     assert all(np.isfinite(t.chosen_in_world).all() for t in stairs_walk.touchdowns)
 
 
@@ -60,7 +63,7 @@ def test_eight_centimetre_stairs_are_climbed_and_descended():
     terrain = make_terrain("stairs", seed=3, rise=0.08)
     settings = WalkSettings(terrain="stairs", seconds=90.0, blind=False, seed=3, stop_at_goal=True)
     result = simulate_walk(SPEC, settings, terrain=terrain)
-    m = result.metrics
+    m = result.metrics.to_json()
     assert m["reached_goal"] and not m["fell"] and not m["frozen"]
     assert m["invalid_footholds"] == 0
     body = result.log.array("body_position_in_world")
@@ -73,8 +76,8 @@ def test_eight_centimetre_stairs_are_climbed_and_descended():
 def test_planning_beats_the_blind_baseline_on_cobblestones():
     """Cobblestones: planned walking reaches the goal without falling, tilting under 2 deg,
     with far fewer invalid footholds than the blind baseline."""
-    planned = _walk("cobblestones", seed=5).metrics
-    blind = _walk("cobblestones", blind=True, seed=5, seconds=40.0).metrics
+    planned = _walk("cobblestones", seed=5).metrics.to_json()
+    blind = _walk("cobblestones", blind=True, seed=5, seconds=40.0).metrics.to_json()
     assert planned["reached_goal"] and not planned["fell"]
     assert planned["tilt_max_deg"] < 2.0
     assert planned["invalid_footholds"] < 0.3 * blind["invalid_footholds"]
@@ -85,7 +88,7 @@ def test_planning_beats_the_blind_baseline_on_cobblestones():
 class Wall(Terrain):
     """A 30 cm wall across the way: impassable."""
 
-    name: str = "wall"
+    name: ClassVar[str] = "wall"
 
     @property
     def goal(self) -> tuple[float, float]:  # type: ignore[override]
@@ -111,7 +114,7 @@ def test_walking_into_an_impassable_wall_freezes_safely():
         terrain="flat", seconds=25.0, blind=False, command=WalkCommand(speed=0.1), straight=True
     )
     result = simulate_walk(SPEC, settings, terrain=Wall())
-    m = result.metrics
+    m = result.metrics.to_json()
     assert m["frozen"] and not m["fell"]
     assert "no valid" in m["frozen_reason"]
     assert any(m["frozen_reason"].startswith(f"leg {n}") for n in SPEC.leg_names)
@@ -129,7 +132,7 @@ def test_a_navigating_robot_goes_round_the_wall_to_the_goal():
         terrain="flat", seconds=90.0, blind=False, command=WalkCommand(speed=0.1), stop_at_goal=True
     )
     result = simulate_walk(SPEC, settings, terrain=Wall())
-    m = result.metrics
+    m = result.metrics.to_json()
     assert m["reached_goal"] and not m["fell"], m
     assert m["invalid_footholds"] == 0
     body = result.log.array("body_position_in_world")[:, :2]

@@ -8,7 +8,8 @@ import pytest
 from footfall.messages import WalkCommand
 from footfall.motion.gait import GaitConfig
 from footfall.robot.spec import load_spec
-from footfall.sim.walk import WalkSettings, simulate_walk
+from footfall.sim.walk import simulate_walk
+from footfall.sim.walk_settings import WalkSettings
 
 SPEC = load_spec("default")
 # Speeds at 3/4 of each gait's top speed, capped at 0.1 m/s (the CLI's default choice).
@@ -29,7 +30,7 @@ def flat_walk(request):
 def test_flat_walk_meets_the_thesis_figures(flat_walk):
     """20 s on flat ground: no fall, speed within 10 %, tilt < 0.5 deg, oscillation < 10 %."""
     gait, result = flat_walk
-    m = result.metrics
+    m = result.metrics.to_json()
     assert not m["fell"] and not m["frozen"], m["frozen_reason"]
     assert m["mean_speed_mps"] == pytest.approx(SPEEDS[gait], rel=0.10)
     assert m["tilt_max_deg"] < 0.5
@@ -41,7 +42,7 @@ def test_flat_walk_meets_the_thesis_figures(flat_walk):
 def test_stance_feet_do_not_slip(flat_walk):
     """Supporting feet slip less than 5 mm per step on flat ground."""
     _, result = flat_walk
-    assert result.metrics["stance_slip_max_m"] < 0.005
+    assert result.metrics.gait.stance_slip_max_m < 0.005
 
 
 def test_supporting_feet_touch_the_ground(flat_walk):
@@ -76,7 +77,7 @@ def test_phantomx_walks_on_its_own_parameters():
     settings = WalkSettings(
         seconds=8.0, command=WalkCommand(speed=0.08, body_height=spec.body_height)
     )
-    m = simulate_walk(spec, settings).metrics
+    m = simulate_walk(spec, settings).metrics.to_json()
     assert not m["fell"] and not m["frozen"], m["frozen_reason"]
     assert m["mean_speed_mps"] == pytest.approx(0.08, rel=0.15)
     assert m["tilt_max_deg"] < 1.0
@@ -137,8 +138,9 @@ def test_skipped_ticks_keep_the_physics_on_the_controller_clock(default_spec):
     """When a wall-clock scheduler skips ticks, the robot lives through the gap (holding its
     targets): the simulator's time stays the controller's."""
     from footfall.runtime.bus import InProcessBus
-    from footfall.sim.terrain import make_terrain
-    from footfall.sim.walk import SimRobot, WalkSettings
+    from footfall.sim.assembly import SimRobot
+    from footfall.sim.terrains import make_terrain
+    from footfall.sim.walk_settings import WalkSettings
 
     settings = WalkSettings(terrain="flat", blind=True)
     robot = SimRobot.build(default_spec, settings, make_terrain("flat"), InProcessBus())

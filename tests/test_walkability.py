@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from footfall.mapping.height_map import MapSnapshot
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.scoring.reference import score_grid_numpy
 from footfall.scoring.walkability import (
     ScoreConfig,

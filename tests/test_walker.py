@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from footfall.messages import GaitState, WalkCommand
-from footfall.motion.gait import GaitConfig, GaitKind
+from footfall.motion.gait import GAITS, GaitConfig
 from footfall.motion.walker import WalkController
 
 DT = 0.01
@@ -31,7 +31,7 @@ def test_standing_still_is_rest(default_spec):
     )
 
 
-@pytest.mark.parametrize("kind", list(GaitKind))
+@pytest.mark.parametrize("kind", GAITS.names())
 def test_supporting_feet_stay_fixed_in_the_world(default_spec, kind):
     """Eqs. 5.17-5.18: a foot in stance does not move in the world while the body walks."""
     controller = WalkController(default_spec, GaitConfig(kind=kind))
@@ -61,7 +61,7 @@ def test_tripod_supports_on_three_feet_and_alternates(default_spec):
     assert set(sets) == {(0, 2, 4), (1, 3, 5)}
 
 
-@pytest.mark.parametrize("kind", list(GaitKind))
+@pytest.mark.parametrize("kind", GAITS.names())
 def test_feet_touch_down_on_their_targets_and_ground(default_spec, kind):
     """At every touchdown the foot is on the ground, where its swing was aimed."""
     controller = WalkController(default_spec, GaitConfig(kind=kind))

@@ -28,8 +28,8 @@ from footfall.errors import InvalidPoseError as InvalidPoseError
 from footfall.errors import PlanningError as PlanningError
 from footfall.errors import SingularConfigurationError as SingularConfigurationError
 from footfall.errors import UnreachableTargetError as UnreachableTargetError
+from footfall.mapping.engine import HeightMapConfig as HeightMapConfig
 from footfall.mapping.height_map import HeightMap as HeightMap
-from footfall.mapping.height_map import HeightMapConfig as HeightMapConfig
 from footfall.messages import EffectorTargets as EffectorTargets
 from footfall.messages import GaitState as GaitState
 from footfall.messages import GaitStatus as GaitStatus
@@ -39,12 +39,13 @@ from footfall.messages import Mode as Mode
 from footfall.messages import RobotState as RobotState
 from footfall.messages import WalkCommand as WalkCommand
 from footfall.metrics import walk_metrics as walk_metrics
+from footfall.motion.flow_swing import FlowConfig as FlowConfig
+from footfall.motion.flow_swing import FlowSwing as FlowSwing
+from footfall.motion.gait import GAITS as GAITS
+from footfall.motion.gait import Gait as Gait
 from footfall.motion.gait import GaitConfig as GaitConfig
-from footfall.motion.gait import GaitKind as GaitKind
-from footfall.motion.swing import FlowConfig as FlowConfig
-from footfall.motion.swing import FlowSwing as FlowSwing
-from footfall.motion.swing import PolynomialArcSwing as PolynomialArcSwing
 from footfall.motion.swing import SwingTrajectory as SwingTrajectory
+from footfall.motion.swing_polynomial import PolynomialArcSwing as PolynomialArcSwing
 from footfall.motion.walker import WalkController as WalkController
 from footfall.nodes.mapping import MappingNode as MappingNode
 from footfall.nodes.movement import MovementNode as MovementNode
@@ -66,6 +67,7 @@ from footfall.sensing.pose import Pose as Pose
 __version__ = "0.1.0"
 
 __all__ = [
+    "GAITS",
     "ConfigError",
     "DatasetError",
     "DepthImageError",
@@ -75,8 +77,8 @@ __all__ = [
     "FootfallError",
     "FootholdConfig",
     "FootholdSearch",
+    "Gait",
     "GaitConfig",
-    "GaitKind",
     "GaitState",
     "GaitStatus",
     "HeightMap",

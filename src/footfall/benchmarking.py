@@ -24,7 +24,8 @@ import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from footfall.errors import ConfigError
-from footfall.mapping.height_map import HeightMap, HeightMapConfig
+from footfall.mapping.engine import HeightMapConfig
+from footfall.mapping.height_map import HeightMap
 from footfall.mapping.reference import integrate_depth_latest
 from footfall.scoring.reference import score_grid_numpy
 from footfall.scoring.walkability import ScoreConfig, score_heights
@@ -135,44 +136,42 @@ def run_mapping_benchmark(repeats: int = 30, seed: int = 0) -> dict[str, float]:
     }
 
 
-# The terrain sweep of `footfall bench terrain`: (terrain, swept parameter, values).
-TERRAIN_SWEEP: tuple[tuple[str, str, tuple[float, ...]], ...] = (
-    ("stairs", "rise", (0.02, 0.04, 0.06, 0.08)),
-    ("cobblestones", "groove", (0.01, 0.03, 0.06)),
-    ("course", "none", (0.0,)),
-    ("stepping_stones", "gap", (0.04, 0.08, 0.12)),
-    ("gaps", "width", (0.05, 0.1, 0.15)),
-    ("boxes", "box_height", (0.04, 0.08, 0.12)),
-    ("ramps", "slope_deg", (10.0, 20.0, 30.0)),
-    ("pits", "depth", (0.05, 0.1, 0.2)),
-    ("obstacle_field", "density", (0.1, 0.2, 0.3)),
-    ("dead_end", "length", (1.8,)),
-)
 # The modes: the full loop with route planning, the same on the straight line (the
 # thesis' behaviour), and the blind baseline.
 TERRAIN_MODES = ("planned", "straight", "blind")
-# Terrains with no route to the goal: a run succeeds by standing still and saying why.
-NO_ROUTE_TERRAINS = ("dead_end",)
 
 
 def terrain_sweep(
     terrains: Sequence[str] | None = None,
 ) -> tuple[tuple[str, str, tuple[float, ...]], ...]:
-    """The sweep's entries for the named terrains (all by default), in the sweep's order.
+    """What ``footfall bench terrain`` walks: ``(terrain, swept parameter, values)``.
+
+    Every registered terrain that is benchmarked (or the named ones), in registration
+    order; a terrain without a difficulty parameter is walked once, as ``("none", (0.0,))``.
 
     Raises:
         ConfigError: On a name the sweep does not hold.
     """
+    from footfall.sim.terrains import TERRAINS
+
+    sweep = []
+    for name in TERRAINS:
+        kind = TERRAINS.get(name)
+        if kind.benchmarked:
+            if kind.difficulty is not None and kind.sweep:
+                sweep.append((name, kind.difficulty, tuple(kind.sweep)))
+            else:
+                sweep.append((name, "none", (0.0,)))
     if terrains is None:
-        return TERRAIN_SWEEP
-    known = {name for name, _, _ in TERRAIN_SWEEP}
+        return tuple(sweep)
+    known = {name for name, _, _ in sweep}
     unknown = [t for t in terrains if t not in known]
     if unknown:
         raise ConfigError(
             f"no terrain {', '.join(map(repr, unknown))} in the sweep; choose from "
-            f"{', '.join(name for name, _, _ in TERRAIN_SWEEP)}"
+            f"{', '.join(name for name, _, _ in sweep)}"
         )
-    return tuple(entry for entry in TERRAIN_SWEEP if entry[0] in terrains)
+    return tuple(entry for entry in sweep if entry[0] in terrains)
 
 
 def terrain_modes(modes: Sequence[str] | None = None) -> tuple[str, ...]:
@@ -195,8 +194,10 @@ def terrain_modes(modes: Sequence[str] | None = None) -> tuple[str, ...]:
 def _terrain_run(job: tuple[str, str, float, str, int, float]) -> dict[str, object]:
     """One walk of the sweep: ``(terrain, parameter, value, mode, seed, seconds)``."""
     from footfall.robot.spec import load_spec
-    from footfall.sim.terrain import make_terrain
-    from footfall.sim.walk import WalkSettings, simulate_walk
+    from footfall.sim.terrains import TERRAINS, make_terrain
+    from footfall.sim.walk import simulate_walk
+    from footfall.sim.walk_metrics import WalkMetrics
+    from footfall.sim.walk_settings import WalkSettings
 
     name, difficulty, value, mode, seed, seconds = job
     params = {} if difficulty == "none" else {difficulty: value}
@@ -210,26 +211,36 @@ def _terrain_run(job: tuple[str, str, float, str, int, float]) -> dict[str, obje
     )
     terrain = make_terrain(name, seed, **params)
     m = simulate_walk(load_spec("default"), settings, terrain=terrain).metrics
-    safe = not m["fell"] and m["invalid_footholds"] == 0
-    no_route = bool(m.get("no_route", False))
-    if name in NO_ROUTE_TERRAINS:
+    assert isinstance(m, WalkMetrics)  # a simulated walk always walks
+    invalid = m.footholds.invalid_footholds or 0
+    safe = not m.fell and invalid == 0
+    navigation = m.navigation
+    no_route = navigation is not None and navigation.no_route
+    if not TERRAINS.get(name).has_route:
         # Standing still with the reason: the navigator's "no route", or a freeze that
         # says why (the thesis' robot at a wall).
-        success = safe and not m["reached_goal"] and (no_route or bool(m["frozen"]))
+        success = safe and not m.reached_goal and (no_route or m.outcome.frozen)
     else:
-        success = safe and bool(m["reached_goal"])
+        success = safe and m.reached_goal
+    reason = (navigation.no_route_reason if navigation is not None else "") or (
+        m.outcome.frozen_reason
+    )
+
+    def replan_ms(value: float | None) -> float:
+        return float("nan") if value is None else float(value)
+
     return {
         "success": success,
-        "fell": bool(m["fell"]),
-        "invalid_footholds": int(m["invalid_footholds"]),
-        "frozen": bool(m["frozen"]),
+        "fell": m.fell,
+        "invalid_footholds": invalid,
+        "frozen": m.outcome.frozen,
         "no_route": no_route,
-        "reason": str(m.get("no_route_reason") or m.get("frozen_reason") or ""),
-        "tilt_max_deg": float(m["tilt_max_deg"]),
-        "sim_seconds": float(m["sim_seconds"]),
-        "wall_seconds": float(m["wall_seconds"]),
-        "replan_ms_median": float(m.get("replan_ms_median", float("nan"))),
-        "replan_ms_p95": float(m.get("replan_ms_p95", float("nan"))),
+        "reason": reason,
+        "tilt_max_deg": m.gait.tilt_max_deg,
+        "sim_seconds": m.gait.sim_seconds,
+        "wall_seconds": m.gait.wall_seconds,
+        "replan_ms_median": replan_ms(navigation and navigation.replan_ms_median),
+        "replan_ms_p95": replan_ms(navigation and navigation.replan_ms_p95),
     }
 
 
@@ -269,7 +280,7 @@ def run_terrain_benchmark(
     """The terrain sweep in every mode (or ``modes``), ``seeds`` runs per configuration.
 
     Success = reached the goal, no fall, zero invalid footholds; on a terrain without a
-    route (``NO_ROUTE_TERRAINS``): stood still and said why, no fall, zero invalid.
+    route (``Terrain.has_route`` False): stood still and said why, no fall, zero invalid.
 
     Args:
         seeds: Runs per terrain, difficulty and mode.

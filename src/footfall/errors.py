@@ -48,3 +48,7 @@ class PlanningError(FootfallError, ValueError):
 
 class MessageError(FootfallError, ValueError):
     """Bytes that do not decode to the message expected: truncated, corrupt, another version."""
+
+
+class BackendError(FootfallError, RuntimeError):
+    """The robot cannot go on: a servo stopped answering, overheated or is overloaded."""

@@ -1,12 +1,13 @@
 """Walking metrics computed from a :class:`~footfall.control_loop.WalkLog`.
 
-Names carry their units; the keys of :func:`walk_metrics` are the ``metrics.json`` interface.
+Names carry their units; the fields of :class:`GaitMetrics` are the first keys of the
+``metrics.json`` interface.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -125,6 +126,64 @@ def fallen(
     return (np.asarray(tilt_deg) > FALL_TILT_DEG) | (sunk & dropped)
 
 
+@dataclass(frozen=True)
+class GaitMetrics:
+    """What the per-tick record says of a walk.
+
+    Attributes:
+        distance_m: Straight-line distance the body travelled [m].
+        mean_speed_mps: That over the walk's time [m/s].
+        commanded_speed_mps: Commanded body speed [m/s].
+        fell: Whether the body fell (tilted or sank, see :func:`fallen`).
+        body_height_error_mean_m: Measured minus commanded body height, mean [m] (a
+            sagging body is negative).
+        body_height_oscillation_ratio: Peak-to-peak height above the ground under the body
+            after the first 2 s over the commanded height (on steps it includes the rises).
+        body_z_tracking_error_mean_m: Measured body height minus the controller's reference
+            after the first 2 s, mean [m]: how well the body follows its planned height.
+        body_z_tracking_error_ptp_m: Its peak to peak [m].
+        tilt_max_deg: Largest tilt of the body from vertical [deg].
+        tilt_rms_deg: RMS tilt [deg].
+        roll_max_deg: Largest roll [deg].
+        pitch_max_deg: Largest pitch [deg].
+        steps: Lift-offs of any leg.
+        stance_slip_max_m: Largest slide of a foot over one stance [m].
+        stance_slip_mean_m: Mean slide [m].
+        swing_apex_median_m: Median highest clearance of a swinging foot [m].
+        frozen: Whether the controller froze.
+        frozen_reason: Why, or "".
+        sim_seconds: Walk time [s].
+        wall_seconds: Wall-clock time it took [s].
+        realtime_factor: Walk time over wall time.
+    """
+
+    distance_m: float
+    mean_speed_mps: float
+    commanded_speed_mps: float
+    fell: bool
+    body_height_error_mean_m: float
+    body_height_oscillation_ratio: float
+    body_z_tracking_error_mean_m: float
+    body_z_tracking_error_ptp_m: float
+    tilt_max_deg: float
+    tilt_rms_deg: float
+    roll_max_deg: float
+    pitch_max_deg: float
+    steps: int
+    stance_slip_max_m: float
+    stance_slip_mean_m: float
+    swing_apex_median_m: float
+    frozen: bool
+    frozen_reason: str
+    sim_seconds: float
+    wall_seconds: float
+    realtime_factor: float
+
+    def to_json(self) -> dict[str, object]:
+        """The fields by name."""
+        return asdict(self)
+
+
 def walk_metrics(
     log: WalkLog,
     commanded_speed_mps: float,
@@ -132,7 +191,7 @@ def walk_metrics(
     foot_radius: float,
     ground: GroundHeight = flat_ground,
     frozen_reason: str = "",
-) -> dict[str, object]:
+) -> GaitMetrics:
     """Summary metrics of a walk.
 
     Args:
@@ -144,15 +203,7 @@ def walk_metrics(
         frozen_reason: Why the controller froze, empty if it did not.
 
     Returns:
-        The ``metrics.json`` content: ``distance_m``, ``mean_speed_mps``,
-        ``commanded_speed_mps``, ``fell``, ``body_height_error_mean_m`` (measured minus
-        commanded, so a sagging body is negative), ``body_height_oscillation_ratio``
-        (peak-to-peak height above the ground under the body after the first 2 s over the
-        commanded height; on steps it includes the rises), ``body_z_tracking_error_mean_m``
-        and ``body_z_tracking_error_ptp_m`` (measured body height minus the controller's
-        reference after the first 2 s: how well the body follows its planned height),
-        ``tilt_max_deg``, ``tilt_rms_deg``, ``sim_seconds``, ``wall_seconds``,
-        ``realtime_factor``, and more.
+        The metrics (see :class:`GaitMetrics`).
     """
     t = log.array("time")
     body = log.array("body_position_in_world")
@@ -172,26 +223,26 @@ def walk_metrics(
     slips = stance_slip_m(log, foot_radius)
     apexes = swing_apexes_m(log, foot_radius, ground)
     swinging = log.array("swinging")
-    return {
-        "distance_m": distance,
-        "mean_speed_mps": distance / sim_seconds if sim_seconds > 0 else 0.0,
-        "commanded_speed_mps": float(commanded_speed_mps),
-        "fell": fell,
-        "body_height_error_mean_m": float(np.mean(height - commanded)),
-        "body_height_oscillation_ratio": float(np.ptp(height[steady]) / np.mean(commanded[steady])),
-        "body_z_tracking_error_mean_m": float(np.mean(tracking)),
-        "body_z_tracking_error_ptp_m": float(np.ptp(tracking)),
-        "tilt_max_deg": float(tilt_deg.max()),
-        "tilt_rms_deg": float(np.sqrt(np.mean(tilt_deg**2))),
-        "roll_max_deg": float(np.degrees(np.abs(log.array("roll")).max())),
-        "pitch_max_deg": float(np.degrees(np.abs(log.array("pitch")).max())),
-        "steps": int(np.count_nonzero(np.diff(swinging.astype(np.int8), axis=0) == 1)),
-        "stance_slip_max_m": float(slips.max()) if slips.size else 0.0,
-        "stance_slip_mean_m": float(slips.mean()) if slips.size else 0.0,
-        "swing_apex_median_m": float(np.median(apexes)) if apexes.size else 0.0,
-        "frozen": bool(frozen_reason),
-        "frozen_reason": frozen_reason,
-        "sim_seconds": sim_seconds,
-        "wall_seconds": float(wall_seconds),
-        "realtime_factor": sim_seconds / wall_seconds if wall_seconds > 0 else float("inf"),
-    }
+    return GaitMetrics(
+        distance_m=distance,
+        mean_speed_mps=distance / sim_seconds if sim_seconds > 0 else 0.0,
+        commanded_speed_mps=float(commanded_speed_mps),
+        fell=fell,
+        body_height_error_mean_m=float(np.mean(height - commanded)),
+        body_height_oscillation_ratio=float(np.ptp(height[steady]) / np.mean(commanded[steady])),
+        body_z_tracking_error_mean_m=float(np.mean(tracking)),
+        body_z_tracking_error_ptp_m=float(np.ptp(tracking)),
+        tilt_max_deg=float(tilt_deg.max()),
+        tilt_rms_deg=float(np.sqrt(np.mean(tilt_deg**2))),
+        roll_max_deg=float(np.degrees(np.abs(log.array("roll")).max())),
+        pitch_max_deg=float(np.degrees(np.abs(log.array("pitch")).max())),
+        steps=int(np.count_nonzero(np.diff(swinging.astype(np.int8), axis=0) == 1)),
+        stance_slip_max_m=float(slips.max()) if slips.size else 0.0,
+        stance_slip_mean_m=float(slips.mean()) if slips.size else 0.0,
+        swing_apex_median_m=float(np.median(apexes)) if apexes.size else 0.0,
+        frozen=bool(frozen_reason),
+        frozen_reason=frozen_reason,
+        sim_seconds=sim_seconds,
+        wall_seconds=float(wall_seconds),
+        realtime_factor=sim_seconds / wall_seconds if wall_seconds > 0 else float("inf"),
+    )

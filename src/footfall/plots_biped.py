@@ -1,4 +1,8 @@
-"""Figures of a biped walk in MuJoCo: top view, COM and ZMP against the support, joints."""
+"""Figures of the biped.
+
+Its plans, the obstacles found in a cloud, and a walk in MuJoCo (top view, COM and ZMP
+against the support, joints).
+"""
 
 from __future__ import annotations
 
@@ -11,7 +15,99 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from footfall.biped.body import JOINTS, SIDES
-from footfall.plots import add_rectangle, save_figure
+from footfall.plots import save_figure
+
+
+def add_rectangle(ax, centre, heading: float, length: float, width: float, **style) -> None:
+    """A rectangle centred at ``centre`` [m], its length along ``heading`` [rad]."""
+    from matplotlib.patches import Rectangle
+
+    c, s = np.cos(heading), np.sin(heading)
+    corner = np.asarray(centre) - np.array([[c, -s], [s, c]]) @ [0.5 * length, 0.5 * width]
+    ax.add_patch(Rectangle(tuple(corner), length, width, angle=float(np.degrees(heading)), **style))
+
+
+def plot_plan(plan, path: Path, title: str = "") -> Path:
+    """Top view of a biped plan in the dissertation's colours.
+
+    Obstacles red with their inflated outline, path blue, footsteps green, the COM black.
+
+    Args:
+        plan: A :class:`footfall.biped.planner.WalkPlan`.
+        path: Output PNG.
+        title: Figure title.
+    """
+    from matplotlib.patches import Circle as CirclePatch
+
+    from footfall.biped.planner import FOOT_LENGTH, FOOT_WIDTH
+
+    m = plan.map
+    fig, ax = plt.subplots(figsize=(8, 8), constrained_layout=True)
+    for c, grown in zip(m.obstacles, m.inflated, strict=True):
+        ax.add_patch(CirclePatch((c.x, c.y), c.r, color="red", alpha=0.6))
+        ax.add_patch(
+            CirclePatch((grown.x, grown.y), grown.r, fill=False, ls="--", color="red", lw=0.8)
+        )
+    for p, h in zip(plan.footsteps.positions, plan.footsteps.headings, strict=True):
+        add_rectangle(ax, p, h, FOOT_LENGTH, FOOT_WIDTH, fill=False, color="green", lw=1.0)
+    w = plan.path.waypoints
+    ax.plot(
+        w[:, 0], w[:, 1], "-o", color="blue", ms=4, lw=1.5, label=f"path {plan.path.length:.2f} m"
+    )
+    ax.plot(
+        plan.pattern.com[:, 0],
+        plan.pattern.com[:, 1],
+        color="black",
+        lw=0.8,
+        label="centre of mass",
+    )
+    ax.plot(*m.start, "s", color="blue", ms=8, label="start")
+    ax.plot(*m.goal, "*", color="blue", ms=12, label="goal")
+    ax.plot([], [], color="green", label="footsteps")
+    ax.plot([], [], color="red", alpha=0.6, lw=6, label="obstacles (dashed: inflated)")
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(
+        title
+        or f"{m.name}: {len(plan.footsteps.positions)} footsteps, planned in {plan.plan_ms:.1f} ms"
+    )
+    return save_figure(fig, path)
+
+
+def plot_obstacles(detection, path: Path) -> Path:
+    """Top view of a detection.
+
+    Ground points grey, obstacle points blue, each cluster's circles in red.
+
+    Args:
+        detection: A :class:`footfall.biped.obstacles.Detection`.
+        path: Output PNG.
+    """
+    from matplotlib.patches import Circle as CirclePatch
+
+    p = detection.points_in_map
+    step = max(1, len(p) // 60000)
+    fig, ax = plt.subplots(figsize=(8, 8), constrained_layout=True)
+    ground = p[~detection.obstacle_mask][::step]
+    ax.scatter(ground[:, 0], ground[:, 1], s=0.3, color="0.75", label="ground / removed")
+    obstacle = p[detection.obstacle_mask][::step]
+    ax.scatter(obstacle[:, 0], obstacle[:, 1], s=0.3, color="tab:blue", label="obstacle points")
+    for cluster in detection.clusters:
+        for c in cluster.circles:
+            ax.add_patch(CirclePatch((c.x, c.y), c.r, fill=False, color="red", lw=1.2))
+        ax.plot(*cluster.centroid[:2], "+", color="red")
+    ax.plot([], [], color="red", label=f"{len(detection.clusters)} obstacles (circles)")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8, markerscale=10)
+    ax.set_title("obstacles seen from above")
+    return save_figure(fig, path)
 
 
 def plot_biped_top(walk, path: Path) -> Path:

@@ -3,14 +3,60 @@
 A backend reads the robot's state (joint encoders, IMU attitude) and takes joint targets.
 The MuJoCo simulation (:mod:`footfall.sim.hexapod`) is one implementation, the mock of
 :mod:`footfall.backends.mock` another; a driver for a real robot's servo bus implements
-the same methods.
+the same four methods and a constructor, :meth:`HexapodBackend.open`, and joins
+:data:`footfall.backends.registry.BACKENDS` with one line (``docs/extending.md``).
+
+The contract every backend keeps:
+
+- **Units and frames.** Joint angles [rad] and rates [rad/s], shape (6, 3), legs in the
+  spec's order (counter-clockwise from the front left), joints coxa, femur, tibia, with
+  the angle conventions of ``docs/frames.md``; the IMU attitude rotates body-frame vectors
+  into the world (z up); the gyro in the body frame [rad/s]. What the robot cannot know
+  (its position in the world, where its feet are, which touch the ground) is None.
+- **Timing.** ``read`` returns the newest state without waiting; ``command`` queues the
+  targets and returns at once. ``advance(duration)`` lets ``duration`` seconds pass: a
+  simulator computes them (``realtime`` False, and a wall-clock scheduler paces the loop);
+  hardware waits for them, or returns at once when its own clock runs (``realtime`` True).
+  ``RobotState.time`` is the backend's clock [s].
+- **Torque.** A backend starts with the torque on; the servo node switches it off at once
+  (the robot starts limp) and on when the mode is walking. With the torque off, targets
+  are dropped, not queued.
+- **Faults.** When the robot cannot go on (a servo that stops answering, overheats or is
+  overloaded), ``command`` raises :class:`~footfall.errors.BackendError` naming the servo
+  and the cause. The servo node then logs it and sends no more targets: the servos hold
+  their last goal, the robot stands where it is (``ServoNode.fault`` says why), and the
+  walk resumes only in a new run.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Protocol
 
 from footfall.messages import JointTargets, RobotState
+from footfall.robot.spec import HexapodSpec
+
+
+@dataclass(frozen=True)
+class BackendSetup:
+    """What a backend is opened with.
+
+    Attributes:
+        spec: The robot.
+        body_height: Body height the robot stands at [m].
+        world: What a simulator puts the robot in (a :class:`~footfall.sim.terrain.Terrain`);
+            a real robot ignores it.
+        camera: The depth camera a simulator renders (a
+            :class:`~footfall.sim.model.CameraMount`), or None for none.
+        options: Backend-specific settings from ``footfall robot --backend-option
+            KEY=VALUE`` (a serial port, a baud rate).
+    """
+
+    spec: HexapodSpec
+    body_height: float
+    world: object = None
+    camera: object = None
+    options: dict[str, str] = field(default_factory=dict)
 
 
 class HexapodBackend(Protocol):
@@ -38,4 +84,12 @@ class HexapodBackend(Protocol):
 
     def advance(self, duration: float) -> None:
         """Let ``duration`` seconds pass (a simulator steps; a real robot waits)."""
+        ...
+
+
+class BackendFactory(Protocol):
+    """A registered backend: a class (or any callable) with ``open``."""
+
+    def open(self, setup: BackendSetup) -> HexapodBackend:
+        """The backend, connected and standing at ``setup.body_height``."""
         ...

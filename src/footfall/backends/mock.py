@@ -14,6 +14,8 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
+from footfall.backends import BackendSetup
+from footfall.errors import ConfigError
 from footfall.messages import JointTargets, RobotState
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.spec import HexapodSpec
@@ -52,6 +54,19 @@ class MockHexapod:
         self.time = 0.0
         self.commands_received = 0
         self.commands_while_limp = 0
+
+    @classmethod
+    def open(cls, setup: BackendSetup) -> MockHexapod:
+        """The mock standing at ``setup.body_height``.
+
+        ``setup.options`` may set ``servo_time_constant`` [s].
+        """
+        tau = setup.options.get("servo_time_constant", "0.01")
+        try:
+            servo_time_constant = float(tau)
+        except ValueError as exc:
+            raise ConfigError(f"servo_time_constant {tau!r} is not a number of seconds") from exc
+        return cls(setup.spec, servo_time_constant, body_height=setup.body_height)
 
     def read(self) -> RobotState:
         """Encoders, a level IMU, and contacts of the feet nearest the ground."""

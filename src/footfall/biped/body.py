@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from footfall.checks import require_positive
 from footfall.errors import ConfigError, UnreachableTargetError
 from footfall.robots import read_description
 
@@ -79,13 +80,20 @@ class BipedSpec:
     camera_pitch: float
 
     def __post_init__(self) -> None:
-        lengths = (self.ankle_height, self.ankle_link, self.shank, self.thigh, self.hip_width)
-        if not all(math.isfinite(v) and v > 0 for v in lengths):
-            raise ConfigError(f"biped link lengths must be positive numbers, got {lengths}")
-        if not all(m > 0 for m in (*self.leg_masses, self.pelvis_mass, self.torso_mass)):
-            raise ConfigError("biped masses must be positive")
-        if not (self.foot_length > 0 and self.foot_width > 0 and self.foot_thickness > 0):
-            raise ConfigError("the foot's size must be positive")
+        require_positive(
+            "biped",
+            ankle_height=self.ankle_height,
+            ankle_link=self.ankle_link,
+            shank=self.shank,
+            thigh=self.thigh,
+            hip_width=self.hip_width,
+            pelvis_mass=self.pelvis_mass,
+            torso_mass=self.torso_mass,
+            foot_length=self.foot_length,
+            foot_width=self.foot_width,
+            foot_thickness=self.foot_thickness,
+        )
+        require_positive("biped", **{f"leg_mass_{k}": m for k, m in enumerate(self.leg_masses)})
         for joint in JOINTS:
             lower, upper = self.limits[joint]
             if not lower < upper:

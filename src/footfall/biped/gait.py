@@ -29,6 +29,7 @@ import scipy.linalg
 
 from footfall.biped.footsteps import Footsteps
 from footfall.biped.lipm import GRAVITY
+from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
 
 SUPPORT_DOUBLE, SUPPORT_LEFT, SUPPORT_RIGHT = 0, 1, 2
@@ -59,12 +60,17 @@ class GaitConfig:
     dt: float = 0.005
 
     def __post_init__(self) -> None:
-        if not (self.step_time > 0 and 0 <= self.double_support < 1 and self.dt > 0):
-            raise ConfigError("step time and dt must be positive, double support in [0, 1)")
-        if not (self.start_time > 0 and self.end_time > 0 and self.preview_time > 0):
-            raise ConfigError("start, end and preview times must be positive")
-        if not self.step_height >= 0:
-            raise ConfigError(f"step height must be >= 0, got {self.step_height}")
+        require_positive(
+            "biped gait",
+            step_time=self.step_time,
+            dt=self.dt,
+            start_time=self.start_time,
+            end_time=self.end_time,
+            preview_time=self.preview_time,
+        )
+        if not 0 <= self.double_support < 1:
+            raise ConfigError(f"double support must lie in [0, 1), got {self.double_support}")
+        require_non_negative("biped gait", step_height=self.step_height)
 
 
 @dataclass(frozen=True)

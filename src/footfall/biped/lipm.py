@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
 
 GRAVITY = 9.81  # [m/s^2]
@@ -48,14 +49,14 @@ class LipmConfig:
     dt: float = 0.01
 
     def __post_init__(self) -> None:
-        if not (self.com_height > 0 and self.support_time > 0 and self.dt > 0):
-            raise ConfigError("com_height, support_time and dt must be positive")
-        if (
-            self.position_weight < 0
-            or self.velocity_weight < 0
-            or self.position_weight + self.velocity_weight == 0
-        ):
-            raise ConfigError("the weights a and b must be >= 0 and not both zero")
+        require_positive(
+            "LIPM", com_height=self.com_height, support_time=self.support_time, dt=self.dt
+        )
+        require_non_negative(
+            "LIPM", position_weight=self.position_weight, velocity_weight=self.velocity_weight
+        )
+        if self.position_weight + self.velocity_weight == 0:
+            raise ConfigError("the weights a and b must not both be zero")
 
     @property
     def time_constant(self) -> float:

@@ -30,6 +30,7 @@ from scipy.spatial.transform import Rotation
 from footfall.biped.avoidance import Circle
 from footfall.biped.cluster_split import FreeFloorGrid, split_cluster
 from footfall.biped.maps import box_circles
+from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError, DatasetError
 from footfall.pointcloud.filters import (
     euclidean_clusters,
@@ -97,10 +98,13 @@ class DetectionConfig:
             raise ConfigError(
                 f"ground must be one of {', '.join(GROUND_METHODS)}, got {self.ground!r}"
             )
-        if not (self.cluster_tolerance > 0 and self.min_cluster_size >= 1 and self.max_depth > 0):
-            raise ConfigError("cluster tolerance, cluster size and max depth must be positive")
-        if not self.voxel_size >= 0:
-            raise ConfigError(f"voxel size must be >= 0, got {self.voxel_size}")
+        require_positive(
+            "obstacle detection",
+            cluster_tolerance=self.cluster_tolerance,
+            min_cluster_size=self.min_cluster_size,
+            max_depth=self.max_depth,
+        )
+        require_non_negative("obstacle detection", voxel_size=self.voxel_size)
         if not self.max_obstacle_height > self.ground_clearance:
             raise ConfigError(
                 "max obstacle height must exceed the ground clearance, got "

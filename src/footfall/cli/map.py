@@ -20,7 +20,7 @@ from footfall.cli.common import (
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``map``."""
-    from footfall.sim.terrain import TERRAIN_NAMES
+    from footfall.sim.terrains import TERRAINS
 
     p = subparsers.add_parser(
         "map",
@@ -33,7 +33,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument(
-        "--terrain", choices=TERRAIN_NAMES, default="course", help="terrain to walk and map"
+        "--terrain", choices=TERRAINS.names(), default="course", help="terrain to walk and map"
     )
     p.add_argument("--seconds", type=float, default=20.0, help="walking time in seconds")
     p.add_argument(

@@ -58,24 +58,50 @@ def network_config(args: argparse.Namespace):
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``robot``."""
+    from footfall.backends.registry import BACKENDS
+    from footfall.nodes.sources import CAMERAS, POSES
     from footfall.runtime.zenoh_bus import DEFAULT_ENDPOINT
-    from footfall.sim.terrain import TERRAIN_NAMES
+    from footfall.sim.terrains import TERRAINS
 
     p = subparsers.add_parser(
         "robot",
-        help="run the simulated hexapod as a robot on the network, driven by a base station",
+        help="run the hexapod as a robot on the network, driven by a base station",
         description=(
-            "Run the hexapod's nodes (camera, pose, mapping, movement, servo) on the MuJoCo "
-            "robot, paced to the wall clock, and bridge them to a zenoh network: images, map, "
-            "pose, state, status and log go out; walk commands and the mode come in. Starts "
-            "in torque-off; stands still when the commands stop for 0.5 s. Ends on Ctrl-C, "
-            "after --seconds, after a fall or at the goal (--stop-at-goal), and writes "
-            "metrics.json, walk.png and footholds.png to --out."
+            "Run the hexapod's nodes (camera, pose, mapping, movement, servo) on a robot "
+            "backend (the MuJoCo robot by default), paced to the wall clock, and bridge them "
+            "to a zenoh network: images, map, pose, state, status and log go out; walk "
+            "commands and the mode come in. Starts in torque-off; stands still when the "
+            "commands stop for 0.5 s. Ends on Ctrl-C, after --seconds, after a fall or at the "
+            "goal (--stop-at-goal), and writes metrics.json, walk.png and footholds.png to "
+            "--out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--sim", choices=TERRAIN_NAMES, default="stairs", help="terrain to stand on")
+    p.add_argument("--sim", choices=TERRAINS.names(), default="stairs", help="terrain to stand on")
     p.add_argument("--seed", type=int, default=0, help="seed of the terrain")
+    p.add_argument(
+        "--backend",
+        choices=BACKENDS.names(),
+        default="sim",
+        help="the robot's driver: sim (MuJoCo), mock (joints that follow their targets), or "
+        "one you registered",
+    )
+    p.add_argument(
+        "--backend-option",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a setting for the backend (a serial port, a baud rate); repeatable",
+    )
+    p.add_argument(
+        "--camera",
+        choices=(*CAMERAS.names(), "none"),
+        default="sim",
+        help="the depth camera; none walks blind (no map, nominal footholds)",
+    )
+    p.add_argument(
+        "--pose", choices=POSES.names(), default="sim", help="the pose source placing the images"
+    )
     p.add_argument("--seconds", type=float, default=600.0, help="longest run in seconds")
     p.add_argument("--stop-at-goal", action="store_true", help="end the run at the goal")
     p.add_argument(
@@ -130,6 +156,16 @@ def _rates(items: list[str]) -> dict[str, float | None]:
     return rates
 
 
+def _options(items: list[str]) -> dict[str, str]:
+    options = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not key or not sep:
+            raise ConfigError(f"--backend-option {item!r}: use KEY=VALUE")
+        options[key] = value
+    return options
+
+
 def run(args: argparse.Namespace, console: Console) -> int:
     """Run the robot until it is stopped; write its record."""
     from footfall.reports.robot import BipedRequest, RobotRequest, run_biped, run_robot_report
@@ -156,19 +192,26 @@ def run(args: argparse.Namespace, console: Console) -> int:
             record=args.record,
             rerun=args.rerun,
             rerun_spawn=args.rerun_spawn,
+            backend=args.backend,
+            backend_options=_options(args.backend_option),
+            camera=None if args.camera == "none" else args.camera,
+            pose=args.pose,
         ),
         network=network_config(args),
         seconds=args.seconds,
         stop_at_goal=args.stop_at_goal,
         rates=_rates(args.rate),
     )
-    ready = _ready(console, args, f"hexapod on {args.sim}; torque off until mode=walking")
+    where = f"{args.backend} hexapod on {args.sim}; torque off until mode=walking"
+    ready = _ready(console, args, where)
     report = run_robot_report(request, on_ready=ready)
     metrics = report.to_json()
+    # A robot that does not know where its feet are is not judged by the terrain's truth.
+    invalid = metrics.get("invalid_footholds", "not judged")
     console.print(
         f"ran {metrics['sim_seconds']:.1f} s: distance {metrics['distance_m']:.2f} m, "
         f"reached goal {metrics['reached_goal']}, fell {metrics['fell']}, "
-        f"invalid footholds {metrics['invalid_footholds']}"
+        f"invalid footholds {invalid}"
     )
     wrote(console, report.write(args.out))
     return 0

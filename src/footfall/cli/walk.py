@@ -14,7 +14,8 @@ from footfall.cli.common import (
     sim_progress,
     wrote,
 )
-from footfall.motion.gait import GaitKind
+from footfall.motion.gait import GAITS
+from footfall.motion.swing import SWINGS
 from footfall.robot.spec import BUILTIN_ROBOTS
 
 SUMMARY = (
@@ -43,7 +44,7 @@ SUMMARY = (
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``walk``."""
     from footfall.reports.walk import DEFAULT_SPEED_MPS
-    from footfall.sim.terrain import TERRAIN_DIFFICULTY, TERRAIN_NAMES
+    from footfall.sim.terrains import TERRAINS, difficulty_parameters
 
     p = subparsers.add_parser(
         "walk",
@@ -57,7 +58,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--terrain", choices=TERRAIN_NAMES, default="stairs", help="terrain to cross")
+    p.add_argument("--terrain", choices=TERRAINS.names(), default="stairs", help="terrain to cross")
     p.add_argument(
         "--seconds",
         type=float,
@@ -73,7 +74,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
             "(stride over the shortest step) when that is lower"
         ),
     )
-    p.add_argument("--gait", choices=[g.value for g in GaitKind], default="tripod", help="gait")
+    p.add_argument("--gait", choices=GAITS.names(), default="tripod", help="gait")
     p.add_argument(
         "--robot",
         default="default",
@@ -86,9 +87,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--swing",
-        choices=("flow", "polynomial"),
+        choices=SWINGS.names(),
         default="flow",
-        help="swing trajectory: the thesis' flow function or its polynomial-arc baseline",
+        help="swing trajectory: the thesis' flow function, its polynomial-arc baseline, or "
+        "one you registered",
     )
     p.add_argument(
         "--height", type=float, default=None, help="body height in m (robot's nominal by default)"
@@ -119,7 +121,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         type=float,
         help=(
             "the terrain's difficulty parameter: "
-            + ", ".join(f"{t} {n}" for t, n in TERRAIN_DIFFICULTY.items())
+            + ", ".join(f"{t} {n}" for t, n in difficulty_parameters().items())
             + " (m, deg for slope_deg, a share for density)"
         ),
     )

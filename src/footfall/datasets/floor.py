@@ -12,7 +12,7 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import DatasetError
-from footfall.mapping.height_map import MapSnapshot
+from footfall.mapping.snapshot import MapSnapshot
 
 
 def floor_level(heights: npt.ArrayLike, bin_m: float = 0.01, min_share: float = 0.25) -> float:

@@ -24,7 +24,8 @@ from scipy.spatial.transform import Rotation
 
 from footfall.datasets.floor import floor_flatness
 from footfall.errors import DatasetError
-from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
+from footfall.mapping.engine import HeightMapConfig
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.messages import DepthFrame, PoseEstimate
 from footfall.nodes.mapping import MappingNode
 from footfall.runtime.bus import Bus, InProcessBus

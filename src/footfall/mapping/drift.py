@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from footfall.checks import require_positive
 from footfall.errors import ConfigError
 
 
@@ -51,10 +52,7 @@ class DriftConfig:
             raise ConfigError(f"drift min_cells must be >= 1, got {self.min_cells}")
         if self.settle_frames < 1:
             raise ConfigError(f"drift settle_frames must be >= 1, got {self.settle_frames}")
-        for name in ("max_step_m", "flat_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ConfigError(f"drift {name} must be a positive number, got {value}")
+        require_positive("drift", max_step_m=self.max_step_m, flat_m=self.flat_m)
 
 
 @dataclass(frozen=True)

@@ -166,6 +166,15 @@ class ColorImage(Message):
 class PoseEstimate(Message):
     """Where the robot is: the pose source's estimate (SLAM, odometry, or the truth).
 
+    A pose source publishes its estimates on ``RAW_TOPIC``; the pose guard checks them
+    against odometry and the IMU and publishes what it trusts on ``TOPIC``. What a source
+    guarantees (see :mod:`footfall.nodes.sources`): ``stamp`` is the time of the depth image
+    the estimate is for (so the map places that image where the camera was); the frames are
+    the depth camera's optical frame (x right, y down, z forward) and the body frame, both
+    in a z-up world; one estimate per depth image, or at least the camera's rate; and a
+    source that has lost track publishes nothing, never a guess (the robot stands once the
+    newest estimate is 0.5 s old).
+
     Attributes:
         stamp: Time the estimate is for [s].
         camera_in_world: The depth camera's optical frame in the world (what visual SLAM
@@ -174,6 +183,7 @@ class PoseEstimate(Message):
     """
 
     TOPIC = "pose"
+    RAW_TOPIC = "pose/raw"
 
     stamp: float
     camera_in_world: Pose

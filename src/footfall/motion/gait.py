@@ -15,41 +15,77 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from enum import StrEnum
 
 import numpy as np
 import numpy.typing as npt
 
+from footfall.checks import require_positive
 from footfall.errors import ConfigError
-from footfall.motion.swing import FlowConfig
+from footfall.motion.flow_swing import FlowConfig
+from footfall.motion.swing import SWINGS
+from footfall.registry import Registry
 
 
-class GaitKind(StrEnum):
-    """The three hexapod gaits of thesis Fig. 5.4."""
+@dataclass(frozen=True)
+class Gait:
+    """A gait: which legs swing together, in stepping order.
 
-    TRIPOD = "tripod"
-    RIPPLE = "ripple"
-    WAVE = "wave"
+    Attributes:
+        name: The name ``--gait`` takes.
+        groups: Swing groups in stepping order; every leg (0-5) in exactly one.
+        by_sextant: The alternating tripod's rule (thesis eqs. 5.15-5.16): the first swing
+            set is the active sextant's leg with every second leg from it, and the legs
+            that swing in a step support in the next. Only for groups {0, 2, 4}, {1, 3, 5}.
+    """
+
+    name: str
+    groups: tuple[tuple[int, ...], ...]
+    by_sextant: bool = False
+
+    def __post_init__(self) -> None:
+        legs = sorted(leg for group in self.groups for leg in group)
+        if legs != list(range(6)) or not all(self.groups):
+            raise ConfigError(
+                f"gait {self.name!r}: every leg 0-5 swings in exactly one non-empty group, "
+                f"got {self.groups}"
+            )
+        if self.by_sextant and {frozenset(g) for g in self.groups} != {
+            frozenset((0, 2, 4)),
+            frozenset((1, 3, 5)),
+        }:
+            raise ConfigError(f"gait {self.name!r}: the sextant rule is the alternating tripod's")
+
+    @property
+    def duty_factor(self) -> float:
+        """Fraction of the cycle each leg supports: 1 - 1 / groups."""
+        return 1.0 - 1.0 / len(self.groups)
 
 
-# Swing groups in the order they step. Tripod: legs i, i+2, i+4 (eq. 5.15). Ripple: each
-# side steps back to front, the sides one step apart, so four feet always support in a
-# quadrilateral. Wave: one leg at a time, back to front on the left, then on the right.
-_GROUPS: dict[GaitKind, tuple[tuple[int, ...], ...]] = {
-    GaitKind.TRIPOD: ((0, 2, 4), (1, 3, 5)),
-    GaitKind.RIPPLE: ((2, 5), (1, 3), (0, 4)),
-    GaitKind.WAVE: ((2,), (1,), (0,), (3,), (4,), (5,)),
-}
+GAITS: Registry[Gait] = Registry("gait")
 
 
-def swing_groups(kind: GaitKind) -> tuple[tuple[int, ...], ...]:
-    """The gait's swing groups, in stepping order."""
-    return _GROUPS[GaitKind(kind)]
+def register_gait(gait: Gait) -> Gait:
+    """Register a gait under its name."""
+    GAITS.register(gait.name, gait)
+    return gait
 
 
-def duty_factor(kind: GaitKind) -> float:
+# Thesis Fig. 5.4. Tripod: legs i, i+2, i+4 (eq. 5.15). Ripple: each side steps back to
+# front, the sides one step apart, so four feet always support in a quadrilateral. Wave:
+# one leg at a time, back to front on the left, then on the right.
+register_gait(Gait("tripod", ((0, 2, 4), (1, 3, 5)), by_sextant=True))
+register_gait(Gait("ripple", ((2, 5), (1, 3), (0, 4))))
+register_gait(Gait("wave", ((2,), (1,), (0,), (3,), (4,), (5,))))
+
+
+def swing_groups(kind: str) -> tuple[tuple[int, ...], ...]:
+    """The swing groups of the gait named ``kind``, in stepping order."""
+    return GAITS.get(kind).groups
+
+
+def duty_factor(kind: str) -> float:
     """Fraction of the cycle each leg supports: 1/2 tripod, 2/3 ripple, 5/6 wave."""
-    return 1.0 - 1.0 / len(swing_groups(kind))
+    return GAITS.get(kind).duty_factor
 
 
 def active_sextant(direction_in_body: npt.ArrayLike, rest_feet_in_body: npt.ArrayLike) -> int:
@@ -101,7 +137,7 @@ class GaitConfig:
     """Walking parameters. Defaults are the thesis' (§8.1): stride 0.15 m, Ch 2.0, q 14.
 
     Attributes:
-        kind: Which gait.
+        kind: Which gait, a name in ``GAITS``.
         stride_length: Longest distance a foot travels over the ground in one swing [m]; None
             takes the robot's (``HexapodSpec.stride_length``).
         min_step_duration: Shortest swing [s]; with the stride it caps the speed.
@@ -114,12 +150,13 @@ class GaitConfig:
         acceleration_limit: Body acceleration limit [m/s^2].
         yaw_acceleration_limit: Body yaw acceleration limit [rad/s^2].
         height_rate_limit: Speed of body height changes [m/s].
-        swing: ``"flow"`` (thesis §5.4.2) or ``"polynomial"`` (the §5.4.1 baseline).
+        swing: The swing trajectory, a name in ``SWINGS``: ``"flow"`` (thesis §5.4.2) or
+            ``"polynomial"`` (the §5.4.1 baseline).
         flow: Flow-function parameters.
         polynomial_apex: Apex of the polynomial arc above the higher end [m].
     """
 
-    kind: GaitKind = GaitKind.TRIPOD
+    kind: str = "tripod"
     stride_length: float | None = None
     min_step_duration: float = 0.3
     max_step_duration: float = 1.0
@@ -135,21 +172,24 @@ class GaitConfig:
     polynomial_apex: float = 0.1
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "kind", GaitKind(self.kind))
-        if self.swing not in ("flow", "polynomial"):
-            raise ConfigError(f"swing must be 'flow' or 'polynomial', got {self.swing!r}")
+        GAITS.check(self.kind)
+        SWINGS.check(self.swing)
         if not 0 < self.min_step_duration <= self.max_step_duration:
             raise ConfigError("need 0 < min_step_duration <= max_step_duration")
-        if self.stride_length is not None and not self.stride_length > 0:
-            raise ConfigError(f"gait stride_length must be positive, got {self.stride_length}")
-        for name in (
-            "rest_step_duration",
-            "acceleration_limit",
-            "yaw_acceleration_limit",
-            "height_rate_limit",
-        ):
-            if not getattr(self, name) > 0:
-                raise ConfigError(f"gait {name} must be positive, got {getattr(self, name)}")
+        if self.stride_length is not None:
+            require_positive("gait", stride_length=self.stride_length)
+        require_positive(
+            "gait",
+            rest_step_duration=self.rest_step_duration,
+            acceleration_limit=self.acceleration_limit,
+            yaw_acceleration_limit=self.yaw_acceleration_limit,
+            height_rate_limit=self.height_rate_limit,
+        )
+
+    @property
+    def gait(self) -> Gait:
+        """The gait ``kind`` names."""
+        return GAITS.get(self.kind)
 
     @property
     def groups(self) -> tuple[tuple[int, ...], ...]:

@@ -15,7 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.motion.command_shaping import CommandShaper
-from footfall.motion.gait import GaitConfig, GaitKind, active_sextant, tripod_swing_set
+from footfall.motion.gait import GaitConfig, active_sextant, tripod_swing_set
 from footfall.robot.planar import PlanarPose
 
 
@@ -128,7 +128,7 @@ class GaitScheduler:
                     swing[list(groups[index])] = True
                     return swing
             return swing
-        if self.start_of_walk and self.config.kind is GaitKind.TRIPOD and shaper.walking:
+        if self.start_of_walk and self.config.gait.by_sextant and shaper.walking:
             swing = tripod_swing_set(
                 shaper.last_walk_direction, self.rest_in_body, feet_in_body(), self.mounts_in_body
             )
@@ -161,7 +161,7 @@ class GaitScheduler:
 
     def support_after(self, swing: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
         """Legs that support during the step after this one (all but the next group)."""
-        if self.config.kind is GaitKind.TRIPOD:
+        if self.config.gait.by_sextant:
             return swing.copy()
         support = np.ones(6, dtype=bool)
         support[list(self.config.groups[(self.group_index + 1) % self.n_groups])] = False

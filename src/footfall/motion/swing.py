@@ -1,38 +1,27 @@
-"""Swing-foot trajectories: the flow function (thesis §5.4.2) and the polynomial arc (§5.4.1).
+"""Swing-foot trajectories: what a swing path is, and the registry of the kinds there are.
 
-Both implement :class:`SwingTrajectory`: a path in the world frame from lift-off to
-touchdown, sampled by time since lift-off, whose target may be moved at any tick.
-
-The flow function (eqs. 5.23-5.26, read as in the errata of ``SPEC.md``) is a direction
-field over ``(h, v)``: the horizontal distance still to go and the height above the target.
-At every point the foot follows the tangent of the parabola ``v' = a h'^2 + b h'`` through the
-target ``(0, 0)`` and the point, with ``a = -|Ch / h| - |S(v)|`` and
-``S(v) = 0.515 (v - q) / (1 + |v - q|) - 0.505``. Multiplying the tangent by ``h`` removes the
-``1/h`` singularity: the (unnormalised) direction is ``(-h, Ch h + |S(v)| h^2 - v)``.
-``S`` and ``q`` carry a length unit: the thesis evaluates them in millimetres (q = 14 is a
-14 mm rise; with Ch = 2 the apex is about one stride, as its §8.1 says), so lengths are
-scaled by ``length_unit`` before the field is evaluated.
-
-Because the field depends only on where the foot is, re-targeting mid-swing integrates it
-again from the foot's current point: a foot already above the new target does not rise a
-second time (Figs. 5.18-5.19), unlike a polynomial restarted from the ground (Fig. 5.12).
-
-Both trajectories, the flow field they integrate and the helpers that lift a path over the
-mapped terrain and cap it under the leg's reach are kept in one module: they share the
-polyline sampling and re-targeting, and are read together against §5.4.
+A swing path (:class:`SwingTrajectory`) runs in the world frame from lift-off to
+touchdown, sampled by time since lift-off, and its target may be moved at any tick. The
+kinds: the flow function of thesis §5.4.2 (:mod:`footfall.motion.flow_swing`), the
+default, and the sixth-order polynomial arc of §5.4.1 (:mod:`footfall.motion.swing_polynomial`),
+the baseline. ``GaitConfig.swing`` names one of :data:`SWINGS`; a new kind is one module
+with a class that has ``plan(SwingPlan)``, and one line that registers it.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import ConfigError
+from footfall.registry import Registry
+
+if TYPE_CHECKING:
+    from footfall.motion.gait import GaitConfig
 
 
 def minimum_jerk(tau: float) -> float:
@@ -111,187 +100,35 @@ TerrainFunction = Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float64]]
 
 
 @dataclass(frozen=True)
-class FlowConfig:
-    """Flow-function parameters (thesis §5.4.2; §8.1 walks with Ch = 2.0, q = 14.0).
+class SwingPlan:
+    """What a swing is planned from.
 
     Attributes:
-        step_height: ``Ch``, shapes the arc; a larger value gives a higher apex.
-        rise: ``q``, height above the target where the vertical rise turns into the arc,
-            in ``length_unit``.
-        length_unit: The length unit the field is evaluated in [m] (thesis: millimetres).
-        resolution: Integration step along the path [m].
-        max_height: Cap on the apex above the higher end of the swing [m], or None. A leg's
-            workspace limits how high its foot can lift; above the cap the path's rise over
-            the straight line between its ends is scaled down, keeping its shape.
+        start: Lift-off position in the world frame, shape (3,) [m].
+        target: Touchdown target in the world frame, shape (3,) [m].
+        duration: Swing duration [s].
+        gait: The gait's settings (the flow parameters, the polynomial's apex).
+        terrain: Height of the mapped terrain under horizontal points, or None (blind).
+        clearance: Least height of the foot centre above that terrain [m].
     """
 
-    step_height: float = 2.0
-    rise: float = 14.0
-    length_unit: float = 0.001
-    resolution: float = 0.002
-    max_height: float | None = None
-
-    def __post_init__(self) -> None:
-        if self.max_height is not None and self.max_height <= 0:
-            raise ConfigError(f"flow max_height must be positive or None, got {self.max_height}")
-        if self.step_height < 0:
-            raise ConfigError(f"flow step_height (Ch) must be >= 0, got {self.step_height}")
-        if self.length_unit <= 0 or self.resolution <= 0:
-            raise ConfigError("flow length_unit and resolution must be positive")
+    start: npt.NDArray[np.float64]
+    target: npt.NDArray[np.float64]
+    duration: float
+    gait: GaitConfig
+    terrain: TerrainFunction | None = None
+    clearance: float = 0.0
 
 
-def sigmoid_like(v: float, q: float) -> float:
-    """``S(v)`` of thesis eq. 5.26 (errata reading), range about -1.02 .. 0.01."""
-    u = v - q
-    return 0.515 * u / (1.0 + abs(u)) - 0.505
+class SwingFactory(Protocol):
+    """A registered kind of swing: a class (or any object) with ``plan``."""
+
+    def plan(self, plan: SwingPlan) -> SwingTrajectory:
+        """The swing path for ``plan``."""
+        ...
 
 
-def flow_direction(h: float, v: float, config: FlowConfig) -> tuple[float, float]:
-    """Unit direction ``(dh, dv)`` of the flow field at ``(h, v)`` in metres.
-
-    Args:
-        h: Horizontal distance still to go, >= 0 [m].
-        v: Height of the foot above the target [m].
-        config: Flow parameters.
-    """
-    unit = config.length_unit
-    hs, vs = h / unit, v / unit
-    dh = -hs
-    dv = config.step_height * hs + abs(sigmoid_like(vs, config.rise)) * hs * hs - vs
-    norm = math.hypot(dh, dv)
-    if norm == 0.0:
-        return 0.0, 0.0
-    return dh / norm, dv / norm
-
-
-def integrate_flow(
-    start: npt.ArrayLike,
-    target: npt.ArrayLike,
-    config: FlowConfig,
-    lift_off_height: float | None = None,
-) -> npt.NDArray[np.float64]:
-    """Follow the flow field from ``start`` to ``target`` (both in the world frame).
-
-    Args:
-        start: Shape (3,) [m].
-        target: Shape (3,) [m].
-        config: Flow parameters.
-        lift_off_height: Height the swing left the ground from [m]; ``config.max_height``
-            counts from the higher of it and the target. Defaults to the start's height; pass
-            it when re-planning from mid-air so the cap does not ride up with the foot.
-
-    Returns:
-        The path as a polyline from start to target inclusive, shape (n, 3) [m].
-    """
-    p0 = np.asarray(start, dtype=np.float64)
-    p1 = np.asarray(target, dtype=np.float64)
-    delta = p1[:2] - p0[:2]
-    h = float(np.hypot(*delta))
-    heading = delta / h if h > 1e-12 else np.zeros(2)
-    v = float(p0[2] - p1[2])
-    ds = config.resolution
-    hs = [h]
-    vs = [v]
-    # Every step shrinks h by a positive fraction and ends in a straight line to the target,
-    # so the loop ends; the bound only guards against non-finite input.
-    for _ in range(100_000):
-        if math.hypot(h, v) <= ds:
-            break
-        # Midpoint (RK2) step of length ds along the field.
-        dh, dv = flow_direction(h, v, config)
-        mh, mv = h + 0.5 * ds * dh, v + 0.5 * ds * dv
-        dh, dv = flow_direction(max(mh, 0.0), mv, config)
-        h, v = max(h + ds * dh, 0.0), v + ds * dv
-        hs.append(h)
-        vs.append(v)
-    hs.append(0.0)
-    vs.append(0.0)
-    h_arr = np.asarray(hs)
-    path = np.empty((h_arr.size, 3))
-    path[:, :2] = p1[:2] - h_arr[:, None] * heading
-    path[:, 2] = p1[2] + np.asarray(vs)
-    if config.max_height is not None:
-        base = p0[2] if lift_off_height is None else lift_off_height
-        path = cap_height(path, max(base, p1[2]) + config.max_height)
-    return path
-
-
-def cap_height(path: npt.NDArray[np.float64], ceiling: float) -> npt.NDArray[np.float64]:
-    """Scale a path's rise over the line joining its ends so that it stays below a ceiling.
-
-    Args:
-        path: Polyline, shape (n, 3) [m].
-        ceiling: Highest allowed z [m]; a path whose ends are higher keeps its ends and
-            runs straight between them.
-
-    Returns:
-        The capped path, shape (n, 3) [m]; the input itself when it is low enough.
-    """
-    top = max(ceiling, path[0, 2], path[-1, 2])
-    if path[:, 2].max() <= top:
-        return path
-    horizontal = np.linalg.norm(path[:, :2] - path[0, :2], axis=1)
-    total = horizontal[-1]
-    fraction = horizontal / total if total > 1e-12 else np.linspace(0.0, 1.0, len(path))
-    base = path[0, 2] + fraction * (path[-1, 2] - path[0, 2])
-    excess = path[:, 2] - base
-    rising = excess > 1e-12
-    scale = float(np.min((top - base[rising]) / excess[rising]))
-    capped = path.copy()
-    capped[:, 2] = base + np.clip(scale, 0.0, 1.0) * excess
-    return capped
-
-
-def raise_over(
-    path: npt.NDArray[np.float64],
-    terrain: TerrainFunction,
-    clearance: float,
-    end_radius: float = 0.03,
-) -> npt.NDArray[np.float64]:
-    """Lift a path so it clears the terrain under it by ``clearance``.
-
-    This is the draft's collision check of the swing motion.
-    The rise of the path over the straight line between its ends is scaled up just enough;
-    points within ``end_radius`` horizontally of either end stand over the footholds
-    themselves and are not checked.
-
-    Args:
-        path: Polyline, shape (n, 3) [m].
-        terrain: Terrain height under horizontal points [m].
-        clearance: Least height of the path above the terrain [m].
-        end_radius: Horizontal radius around the ends left unchecked [m].
-
-    Returns:
-        The lifted path (the input itself when it already clears), shape (n, 3) [m].
-    """
-    start, end = path[0, :2], path[-1, :2]
-    far = (np.linalg.norm(path[:, :2] - start, axis=1) > end_radius) & (
-        np.linalg.norm(path[:, :2] - end, axis=1) > end_radius
-    )
-    if not far.any():
-        return path
-    need = terrain(path[far, :2]) + clearance
-    if np.all(path[far, 2] >= need):
-        return path
-    horizontal = np.linalg.norm(path[:, :2] - start, axis=1)
-    total = horizontal[-1]
-    fraction = horizontal / total if total > 1e-12 else np.linspace(0.0, 1.0, len(path))
-    base = path[0, 2] + fraction * (path[-1, 2] - path[0, 2])
-    excess = path[:, 2] - base
-    lift = np.maximum(need - base[far], 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        scale = np.where(excess[far] > 1e-6, lift / excess[far], np.inf)
-    k = float(np.max(scale[lift > 0], initial=1.0))
-    raised = path.copy()
-    if np.isfinite(k):
-        raised[:, 2] = base + max(k, 1.0) * excess
-    else:  # part of the path runs along the straight line: add a smooth bump instead
-        bump = np.sin(np.pi * fraction)
-        raised[:, 2] = path[:, 2] + float(np.max(lift)) * bump
-    return raised
-
-
-class _PolylineSwing:
+class PolylineSwing:
     """Shared time-scaling of a swing along a polyline that is replaced on re-targeting.
 
     Progress along the path follows a minimum-jerk profile over the swing. When the path is
@@ -343,154 +180,7 @@ class _PolylineSwing:
         return np.array([np.interp(along, self._arclength, self._path[:, k]) for k in range(3)])
 
 
-class FlowSwing(_PolylineSwing):
-    """Swing along the flow field of thesis §5.4.2.
+SWINGS: Registry[SwingFactory] = Registry("swing trajectory")
 
-    Args:
-        start: Lift-off position in the world frame, shape (3,) [m].
-        target: Touchdown target in the world frame, shape (3,) [m].
-        duration: Swing duration [s].
-        config: Flow parameters.
-        terrain: Terrain height under horizontal points; when given, the path is lifted to
-            clear it by ``clearance`` (see :func:`raise_over`).
-        clearance: Least height of the path (foot centre) above the terrain [m].
-    """
-
-    def __init__(
-        self,
-        start: npt.ArrayLike,
-        target: npt.ArrayLike,
-        duration: float,
-        config: FlowConfig,
-        terrain: TerrainFunction | None = None,
-        clearance: float = 0.0,
-    ) -> None:
-        super().__init__(duration)
-        self.config = config
-        self._terrain = terrain
-        self._clearance = clearance
-        self._start = np.asarray(start, dtype=np.float64).copy()
-        self._lift_off_height = float(self._start[2])
-        self._set_path(self._plan(self._start, target), 0.0)
-
-    def _plan(self, here: npt.ArrayLike, target: npt.ArrayLike) -> npt.NDArray[np.float64]:
-        path = integrate_flow(here, target, self.config, self._lift_off_height)
-        if self._terrain is not None:
-            path = raise_over(path, self._terrain, self._clearance)
-            if self.config.max_height is not None:
-                # Clearance never lifts the foot beyond the leg's workspace.
-                top = (
-                    max(self._lift_off_height, float(np.asarray(target)[2]))
-                    + self.config.max_height
-                )
-                path = cap_height(path, top)
-        return path
-
-    def retarget(self, target: npt.ArrayLike, t: float, duration: float | None = None) -> None:
-        """Follow the field from the foot's position at ``t`` to a new target."""
-        here = self.position(t)
-        if duration is not None:
-            self.duration = duration
-        self._set_path(self._plan(here, target), t)
-
-
-def polynomial_arc_coefficients(
-    q_start: npt.ArrayLike, q_mid: npt.ArrayLike, q_end: npt.ArrayLike, t_end: float
-) -> npt.NDArray[np.float64]:
-    """Coefficients ``a0..a6`` of the sixth-order arc through three points (thesis eq. 5.22).
-
-    The arc starts at rest (``a1 = a2 = 0``), passes ``q_mid`` at ``t_end / 2`` and ends at
-    ``q_end`` at ``t_end``.
-
-    Returns:
-        Shape (7, 3): one column per coordinate.
-    """
-    qi = np.asarray(q_start, dtype=np.float64)
-    dm = np.asarray(q_mid, dtype=np.float64) - qi
-    df = np.asarray(q_end, dtype=np.float64) - qi
-    tf = float(t_end)
-    return np.stack(
-        [
-            qi,
-            np.zeros_like(qi),
-            np.zeros_like(qi),
-            2.0 / tf**3 * (32.0 * dm - 11.0 * df),
-            -3.0 / tf**4 * (64.0 * dm - 27.0 * df),
-            3.0 / tf**5 * (64.0 * dm - 30.0 * df),
-            -32.0 / tf**6 * (2.0 * dm - df),
-        ]
-    )
-
-
-class PolynomialArcSwing:
-    """The thesis' baseline swing: one sixth-order polynomial per axis (eqs. 5.21-5.22).
-
-    The mid point lies half way between start and target, ``apex_height`` above the higher
-    of the two. Re-targeting recomputes the arc from the current point as if it were a new
-    lift-off, which makes the foot rise again (the defect of Fig. 5.12); it is kept as the
-    baseline the flow function is compared with.
-
-    Args:
-        start: Lift-off position in the world frame, shape (3,) [m].
-        target: Touchdown target, shape (3,) [m].
-        duration: Swing duration [s].
-        apex_height: Height of the mid point above the higher end [m].
-    """
-
-    def __init__(
-        self, start: npt.ArrayLike, target: npt.ArrayLike, duration: float, apex_height: float
-    ) -> None:
-        if not duration > 0:
-            raise ConfigError(f"swing duration must be positive, got {duration}")
-        self.duration = duration
-        self.apex_height = apex_height
-        self._t0 = 0.0
-        self._start = np.asarray(start, dtype=np.float64).copy()
-        self._fit(self._start, np.asarray(target, dtype=np.float64), 0.0)
-
-    @property
-    def start(self) -> npt.NDArray[np.float64]:
-        """Lift-off position, shape (3,) [m]."""
-        return self._start.copy()
-
-    def transform(
-        self, rotation: npt.NDArray[np.float64], translation: npt.NDArray[np.float64]
-    ) -> None:
-        """Move the whole swing by a planar rigid transform."""
-        r = np.asarray(rotation)
-        self._coefficients[:, :2] = self._coefficients[:, :2] @ r.T
-        self._coefficients[0, :2] += translation
-        self._target[:2] = r @ self._target[:2] + translation
-        self._start[:2] = r @ self._start[:2] + translation
-
-    def _fit(
-        self, start: npt.NDArray[np.float64], target: npt.NDArray[np.float64], t0: float
-    ) -> None:
-        mid = 0.5 * (start + target)
-        mid[2] = max(start[2], target[2]) + self.apex_height
-        self._t0 = t0
-        self._target = target.copy()
-        self._coefficients = polynomial_arc_coefficients(start, mid, target, self.duration - t0)
-
-    @property
-    def target(self) -> npt.NDArray[np.float64]:
-        """Current touchdown target, shape (3,) [m]."""
-        return self._target.copy()
-
-    def position(self, t: float) -> npt.NDArray[np.float64]:
-        """Foot position at ``t`` seconds after lift-off, shape (3,) [m]."""
-        tau = min(max(t, self._t0), self.duration) - self._t0
-        powers = tau ** np.arange(7)
-        return powers @ self._coefficients
-
-    def retarget(self, target: npt.ArrayLike, t: float, duration: float | None = None) -> None:
-        """Refit the arc from the position at ``t`` to the new target."""
-        here = self.position(t)
-        if duration is not None:
-            self.duration = duration
-        if t >= self.duration:
-            self._fit(
-                np.asarray(target, dtype=np.float64), np.asarray(target, dtype=np.float64), 0.0
-            )
-            return
-        self._fit(here, np.asarray(target, dtype=np.float64), t)
+SWINGS.register("flow", "footfall.motion.flow_swing:FlowSwing")
+SWINGS.register("polynomial", "footfall.motion.swing_polynomial:PolynomialArcSwing")

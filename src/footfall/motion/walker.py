@@ -41,14 +41,13 @@ from footfall.motion.leg_solver import FootTargets, LegSolver
 from footfall.motion.registration import RegistrationDrift
 from footfall.motion.safety import SafetyMonitor
 from footfall.motion.stroke_governor import StrokeGovernor
-from footfall.motion.swing import FlowSwing, PolynomialArcSwing, SwingTrajectory, time_to_land
+from footfall.motion.swing import SwingTrajectory
+from footfall.motion.swing_feet import SwingFeet
 from footfall.planning.terrain_planner import NoFoothold, TerrainPlanner
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 
-# Time step of the finite difference that gives the swing foot's velocity [s].
-_VELOCITY_PROBE_DT = 1e-3
 # A body this far off its reference height on resuming is re-anchored on the encoders [m].
 REANCHOR_HEIGHT = 0.01
 
@@ -100,8 +99,7 @@ class WalkController:
         self.safety = SafetyMonitor()
         self.state = GaitState.REST
         self.feet_in_world = self.scheduler.rest_feet_in_world(self.pose)
-        self.swinging = np.zeros(6, dtype=bool)
-        self.swings: dict[int, SwingTrajectory] = {}
+        self.swing_feet = SwingFeet()
         self.floor = 0.0  # ground height the body keeps its commanded height above [m]
         self.footholds_adjusted = 0
         self.touchdowns: deque[Touchdown] = deque()  # a long run bounds it (maxlen)
@@ -114,6 +112,16 @@ class WalkController:
         self._last_targets = self._solve(np.zeros((6, 3)))
 
     # Public ------------------------------------------------------------------------------
+    @property
+    def swinging(self) -> npt.NDArray[np.bool_]:
+        """Which legs swing, shape (6,)."""
+        return self.swing_feet.swinging
+
+    @property
+    def swings(self) -> dict[int, SwingTrajectory]:
+        """The swinging legs' paths, by leg index."""
+        return self.swing_feet.swings
+
     @property
     def frozen_reason(self) -> str:
         """Why the robot froze ("" when it has not)."""
@@ -201,7 +209,7 @@ class WalkController:
         self.height = height
         self.feet_in_world = self.pose.points_to_world(feet)
         self.feet_in_world[:, 2] += height
-        self.swings, self.swinging[:] = {}, False
+        self.swing_feet.clear()
         self.state = GaitState.REST
         self.safety.resume()
         self.shaper.stop()
@@ -227,8 +235,7 @@ class WalkController:
         self.feet_in_world[..., :2] = feet[..., :2] @ rotation.T + translation
         self.solver.rotate(rotation)
         self.footholds.plan.move(rotation, translation)
-        for swing in self.swings.values():
-            swing.transform(rotation, translation)
+        self.swing_feet.transform(rotation, translation)
         self.pose = estimate
 
     # Parts wired together ----------------------------------------------------------------
@@ -326,8 +333,7 @@ class WalkController:
             self.touchdown_count += 1
             moved = (record.chosen_in_world - record.nominal_in_world)[:2]
             self.footholds_adjusted += bool(np.hypot(*moved) > 1e-3)
-        self.swings = {}
-        self.swinging[:] = False
+        self.swing_feet.clear()
         self.scheduler.steps_taken += 1
         self.state = GaitState.REST
         moved = math.hypot(
@@ -372,23 +378,21 @@ class WalkController:
             s.group_index, s.start_of_walk = group_before, start_before
             self._freeze(targets.reason, leg=targets.leg)
             return
-        self.swinging = swing
         self.state = GaitState.STEPPING
-        self.swings = {}
-        terrain = self.footholds.terrain_under if self.planner is not None else None
-        clearance = self.footholds.swing_clearance
+        starts = self.feet_commanded_in_world
         for leg in np.flatnonzero(swing):
-            start = self.feet_commanded_in_world[leg].copy()
-            self.feet_in_world[leg] = start
+            self.feet_in_world[leg] = starts[leg]
             self.solver.lifted(int(leg))
-            if self.config.swing == "flow":
-                self.swings[int(leg)] = FlowSwing(
-                    start, targets[leg], s.step_duration, self.config.flow, terrain, clearance
-                )
-            else:
-                self.swings[int(leg)] = PolynomialArcSwing(
-                    start, targets[leg], s.step_duration, self.config.polynomial_apex
-                )
+        terrain = self.footholds.terrain_under if self.planner is not None else None
+        self.swing_feet.lift(
+            swing,
+            starts,
+            targets,
+            s.step_duration,
+            self.config,
+            terrain,
+            self.footholds.swing_clearance,
+        )
         self._update_floor(targets)
 
     def _update_floor(self, targets: npt.NDArray[np.float64]) -> None:
@@ -405,9 +409,8 @@ class WalkController:
 
     def _move_swing_feet(self, t: float) -> npt.NDArray[np.float64]:
         """Move swinging feet along their paths; returns their world velocities, shape (6, 3)."""
-        velocity = np.zeros((6, 3))
         if not self.swings:
-            return velocity
+            return np.zeros((6, 3))
         starts = {leg: swing.start for leg, swing in self.swings.items()}
         targets, replanned = self.footholds.current_targets(
             self._context(), self._nominal_targets(), self.swinging, starts
@@ -415,26 +418,13 @@ class WalkController:
         if replanned:
             self._update_floor(targets)
         local_t = t - self.scheduler.step_start
-        moved = {
-            leg: targets[leg]
-            for leg, swing in self.swings.items()
-            if np.linalg.norm(targets[leg] - swing.target) > self.config.retarget_tolerance
-        }
-        ways = [
-            float(np.linalg.norm(goal - self.swings[leg].position(local_t)))
-            for leg, goal in moved.items()
-        ]
-        wait = time_to_land(ways, self.scheduler.remaining(t))
-        if wait is not None:  # the group lands together, when the farthest foot can
-            self.scheduler.step_duration = local_t + wait
-        for leg, swing in self.swings.items():
-            if leg in moved or wait is not None:
-                duration = None if wait is None else self.scheduler.step_duration
-                swing.retarget(moved.get(leg, swing.target), local_t, duration)
-        for leg, swing in self.swings.items():
-            self.feet_in_world[leg] = swing.position(local_t)
-            ahead = swing.position(local_t + _VELOCITY_PROBE_DT)
-            velocity[leg] = (ahead - self.feet_in_world[leg]) / _VELOCITY_PROBE_DT
+        positions, velocity, duration = self.swing_feet.follow(
+            targets, local_t, self.scheduler.remaining(t), self.config.retarget_tolerance
+        )
+        if duration is not None:  # the group lands together, when the farthest foot can
+            self.scheduler.step_duration = duration
+        for leg, position in positions.items():
+            self.feet_in_world[leg] = position
         return velocity
 
     def _solve(self, swing_velocity_in_world: npt.NDArray[np.float64]) -> FootTargets:

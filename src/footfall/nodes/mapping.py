@@ -20,7 +20,8 @@ from collections import deque
 
 import numpy as np
 
-from footfall.mapping.height_map import HeightMap, HeightMapConfig, MapSnapshot
+from footfall.mapping.engine import HeightMapConfig, MapEngine, open_map
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.messages import DepthFrame, GroundPrior, LogLine, MapUpdate, PoseEstimate
 from footfall.nodes.pose_guard import ALTERNATIVE_POSE_TOPIC, REGISTERED_POSE_TOPIC
 from footfall.runtime.bus import Bus
@@ -128,7 +129,7 @@ class MappingNode:
         self.bus = bus
         self.reject_repeats = reject_repeats
         self.score_config = score_config or ScoreConfig()
-        self.height_map = HeightMap(map_config, centre=centre)
+        self.height_map: MapEngine = open_map(map_config, centre=centre)
         self.initial_centre = (float(centre[0]), float(centre[1]))
         self.publish_every_frame = publish_every_frame
         self.stride = stride

@@ -31,7 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from footfall.messages import GaitState, GaitStatus, LogLine, MapUpdate, WalkCommand
+from footfall.messages import GaitStatus, LogLine, MapUpdate, WalkCommand
+from footfall.nodes.stuck import StuckWatch
 from footfall.planning.navigation import (
     NavigationConfig,
     NoRoute,
@@ -46,15 +47,6 @@ from footfall.runtime.bus import Bus
 
 # Replan times kept for the timing figures.
 TIMING_HISTORY = 10_000
-# A foot's place counts as unseen when less than this share of the cells around it is known.
-UNSEEN_SHARE = 0.5
-# A look is done when the body faces the place within this [rad], or after this long [s].
-LOOK_DONE_RAD = math.radians(10.0)
-LOOK_TIMEOUT_S = 10.0
-# A walker that froze and has not moved farther than this since is still stuck there [m].
-STUCK_RADIUS_M = 0.1
-# A place within this of one already looked at is not looked at again [m].
-LOOKED_RADIUS_M = 0.1
 
 
 @dataclass(frozen=True)
@@ -153,28 +145,21 @@ class NavigatorNode:
         self.bus = bus
         self.config = config or NavigationConfig()
         self.span_radius_m = span_radius(spec)
-        self.leg_names = spec.leg_names
-        self.rest_feet_in_body = spec.rest_feet_in_body()[:, :2]
         self.goal: tuple[float, float] | None = None
         self.route: Route | None = None
         self.no_route: NoRoute | None = None
         self.grid: CostGrid | None = None
         self.replans = 0
-        self.blocked_count = 0
-        self.looks = 0
         self.plan_seconds: deque[float] = deque(maxlen=TIMING_HISTORY)
         self._map: MapUpdate | None = None
         self._planned_sequence = -1
         self._planned_at = -math.inf
         self._force = False
         self._misses = 0
-        self._blocked: list[tuple[float, float, float, float]] = []
-        self._frozen_since: float | None = None
-        self._frozen_at: tuple[float, float] | None = None
-        self._blocked_this_freeze = False
         self._last_command: WalkCommand | None = None
-        self._look: tuple[float, float] | None = None  # (yaw to face [rad], until [s])
-        self._looked: list[tuple[float, float]] = []
+        self.stuck = StuckWatch(
+            self.config, spec.leg_names, spec.rest_feet_in_body()[:, :2], self._log
+        )
         self._walls = WallMemory()
         self._pool = ThreadPoolExecutor(max_workers=1) if background else None
         self._pending: Future[PlanOutcome] | None = None
@@ -213,7 +198,7 @@ class NavigatorNode:
         )
         self._walls.forget_flat(grid)
         t1 = time.perf_counter()
-        blocked = tuple((x, y, r) for x, y, r, until in self._blocked if until > t)
+        blocked = self.stuck.blocked_discs(t)
         result = plan_route(grid, (pose.x, pose.y), goal, self.config, blocked, self.route)
         t2 = time.perf_counter()
         return PlanOutcome(result, grid, update.sequence, t1 - t0, t2 - t1)
@@ -235,88 +220,6 @@ class NavigatorNode:
 
     def _log(self, t: float, level: str, text: str) -> None:
         self.bus.publish(LogLine.TOPIC, LogLine(t, self.name, level, text))
-
-    def _watch_freeze(self, t: float, status: GaitStatus) -> None:
-        """Keep the ground ahead of a walker frozen for want of footholds out of routes."""
-        pose = status.body_pose
-        if self._frozen_at is not None and (
-            math.hypot(pose.x - self._frozen_at[0], pose.y - self._frozen_at[1]) > STUCK_RADIUS_M
-        ):
-            # Walked on from where it froze: the next freeze starts the count afresh.
-            self._frozen_since, self._frozen_at, self._blocked_this_freeze = None, None, False
-        if status.state is not GaitState.FROZEN:
-            return
-        if self._frozen_since is None:
-            # Counted from the first freeze here: a walker that retries on each fresh map
-            # and freezes again at once is as stuck as one that stays frozen.
-            self._frozen_since, self._frozen_at = t, (pose.x, pose.y)
-        if self._blocked_this_freeze or t - self._frozen_since < self.config.blocked_after_s:
-            return
-        place = self._unseen_place(status)
-        if place is not None:
-            self._looked.append(place)
-            yaw = math.atan2(place[1] - pose.y, place[0] - pose.x)
-            self._look = (yaw, t + LOOK_TIMEOUT_S)
-            self._blocked_this_freeze = True
-            self.looks += 1
-            self._log(
-                t,
-                "info",
-                f"leg {status.frozen_leg} has not seen where it steps ({place[0]:.2f}, "
-                f"{place[1]:.2f}) m; turning to look",
-            )
-            return
-        heading = pose.yaw
-        command = self._last_command
-        if command is not None and command.speed > 0:
-            heading += math.atan2(command.direction[1], command.direction[0])
-        ahead = self.config.blocked_ahead_m
-        x, y = pose.x + ahead * math.cos(heading), pose.y + ahead * math.sin(heading)
-        self._blocked.append((x, y, self.config.blocked_radius_m, t + self.config.blocked_for_s))
-        self._blocked = [b for b in self._blocked if b[3] > t]
-        self._blocked_this_freeze = True
-        self.blocked_count += 1
-        self._force = True
-        self._log(
-            t, "info", f"route blocked at ({x:.2f}, {y:.2f}) m ({status.frozen_reason}); replanning"
-        )
-
-    def _unseen_place(self, status: GaitStatus) -> tuple[float, float] | None:
-        """Where the frozen leg steps at rest, if the map has not seen it and no look has."""
-        update = self._map
-        if update is None or status.frozen_leg not in self.leg_names:
-            return None
-        foot = self.rest_feet_in_body[self.leg_names.index(status.frozen_leg)]
-        x, y = (float(v) for v in status.body_pose.points_to_world(foot))
-        if any(math.hypot(x - a, y - b) < LOOKED_RADIUS_M for a, b in self._looked):
-            return None
-        known = np.asarray(update.known, dtype=bool)
-        res = update.resolution
-        half = max(1, round(self.config.traversability.support_radius_m / res))
-        i = math.floor((x - update.origin[0]) / res)
-        j = math.floor((y - update.origin[1]) / res)
-        n = known.shape[0]
-        around = known[
-            max(i - half, 0) : min(i + half + 1, n), max(j - half, 0) : min(j + half + 1, n)
-        ]
-        seen = float(around.mean()) if around.size else 0.0
-        return (x, y) if seen < UNSEEN_SHARE else None
-
-    def _looking(self, t: float, pose: PlanarPose, base: WalkCommand) -> WalkCommand | None:
-        """The turn on the spot of a look under way, or None once it is done."""
-        if self._look is None:
-            return None
-        yaw, until = self._look
-        error = math.atan2(math.sin(yaw - pose.yaw), math.cos(yaw - pose.yaw))
-        if abs(error) < LOOK_DONE_RAD or t > until:
-            self._look = None
-            self._force = True  # plan on what the look showed
-            # Stuck here again after the look: the count starts afresh, and ends in a block.
-            self._frozen_since, self._frozen_at, self._blocked_this_freeze = None, None, False
-            return None
-        rate = self.config.max_yaw_rate
-        yaw_rate = float(np.clip(self.config.yaw_gain * error, -rate, rate))
-        return WalkCommand(speed=0.0, body_height=base.body_height, yaw_rate=yaw_rate, stamp=t)
 
     def _replan(self, t: float, pose: PlanarPose) -> None:
         if self._pending is not None and self._pending.done():
@@ -342,9 +245,12 @@ class NavigatorNode:
     def command(self, t: float, status: GaitStatus, base: WalkCommand) -> WalkCommand:
         """The walk command at time ``t`` [s] for the robot's status, at ``base``'s speed."""
         pose = status.body_pose
-        self._watch_freeze(t, status)
+        if self.stuck.watch(t, status, self._last_command, self._map):
+            self._force = True
         stop = WalkCommand(speed=0.0, body_height=base.body_height, stamp=t)
-        look = self._looking(t, pose, base)
+        look, looked = self.stuck.looking(t, pose, base)
+        if looked:
+            self._force = True  # plan on what the look showed
         if self.goal is None or self.at_goal(pose):
             command = stop
         elif look is not None:
@@ -368,8 +274,8 @@ class NavigatorNode:
             "replans": self.replans,
             "replan_ms_median": 1e3 * statistics.median(times),
             "replan_ms_p95": 1e3 * p95,
-            "routes_blocked": self.blocked_count,
-            "looks": self.looks,
+            "routes_blocked": self.stuck.blocked_count,
+            "looks": self.stuck.looks,
         }
 
     def close(self) -> None:

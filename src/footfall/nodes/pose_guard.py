@@ -56,11 +56,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from footfall.checks import require_positive
 from footfall.errors import ConfigError
 from footfall.messages import GaitStatus, LogLine, PoseEstimate, RobotState
 from footfall.robot.planar import PlanarPose
 from footfall.runtime.bus import Bus
-from footfall.runtime.faults import RAW_POSE_TOPIC
 from footfall.sensing.pose import Pose
 
 # Where the guard publishes the estimate without its latest re-registration, and where
@@ -106,22 +106,19 @@ class PoseGuardConfig:
     imu_tilt: bool = True
 
     def __post_init__(self) -> None:
-        for name in ("position_m", "position_rate_mps", "angle_deg", "angle_rate_dps"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ConfigError(f"pose guard {name} must be a positive number, got {value}")
-        if not (math.isfinite(self.odometry_noise_m) and self.odometry_noise_m > 0):
-            raise ConfigError(
-                f"pose guard odometry_noise_m must be positive, got {self.odometry_noise_m}"
-            )
+        require_positive(
+            "pose guard",
+            position_m=self.position_m,
+            position_rate_mps=self.position_rate_mps,
+            angle_deg=self.angle_deg,
+            angle_rate_dps=self.angle_rate_dps,
+            odometry_noise_m=self.odometry_noise_m,
+            jump_sigmas=self.jump_sigmas,
+        )
         if not 0.0 < self.min_gain <= 1.0:
             raise ConfigError(f"pose guard min_gain must lie in (0, 1], got {self.min_gain}")
         if self.noise_memory < 1:
             raise ConfigError(f"pose guard noise_memory must be >= 1, got {self.noise_memory}")
-        if not (math.isfinite(self.jump_sigmas) and self.jump_sigmas > 0):
-            raise ConfigError(
-                f"pose guard jump_sigmas must be a positive number, got {self.jump_sigmas}"
-            )
 
 
 def heading(rotation: Rotation) -> float:
@@ -156,7 +153,7 @@ class PoseGuardNode:
         self,
         bus: Bus,
         config: PoseGuardConfig | None = None,
-        raw_topic: str = RAW_POSE_TOPIC,
+        raw_topic: str = PoseEstimate.RAW_TOPIC,
     ) -> None:
         self.bus = bus
         self.config = config or PoseGuardConfig()

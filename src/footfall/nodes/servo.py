@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from footfall.backends import HexapodBackend
-from footfall.errors import SingularConfigurationError, UnreachableTargetError
+from footfall.errors import BackendError, SingularConfigurationError, UnreachableTargetError
 from footfall.messages import (
     EffectorTargets,
     JointTargets,
@@ -43,6 +43,7 @@ class ServoNode:
         self.mode = Mode.TORQUE_OFF
         self.joint_targets_sent = 0
         self.last_targets: JointTargets | None = None
+        self.fault = ""  # why the robot stopped taking targets (a backend fault), or ""
         backend.set_torque(False)
         bus.subscribe(ModeCommand.TOPIC, self._on_mode, last=True)
         bus.subscribe(EffectorTargets.TOPIC, self._on_targets)
@@ -69,7 +70,7 @@ class ServoNode:
         return JointTargets(positions=angles, velocities=rates, stamp=targets.stamp)
 
     def _on_targets(self, targets: EffectorTargets) -> None:
-        if self.mode is not Mode.WALKING:
+        if self.mode is not Mode.WALKING or self.fault:
             return
         try:
             joints = self.joint_targets(targets)
@@ -77,7 +78,13 @@ class ServoNode:
             # Hold the last targets: the feet stay where they are.
             self.bus.publish(LogLine.TOPIC, LogLine(targets.stamp, self.name, "error", str(exc)))
             return
-        self.backend.command(joints)
+        try:
+            self.backend.command(joints)
+        except BackendError as exc:
+            # The servos hold their last goal; nothing more is sent to a failing robot.
+            self.fault = str(exc)
+            self.bus.publish(LogLine.TOPIC, LogLine(targets.stamp, self.name, "error", self.fault))
+            return
         self.last_targets = joints
         self.joint_targets_sent += 1
         self.bus.publish(JointTargets.TOPIC, joints)

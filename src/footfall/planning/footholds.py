@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from footfall.checks import require_non_negative
 from footfall.errors import ConfigError
 from footfall.scoring.walkability import ScoreMap
 
@@ -49,8 +50,9 @@ class FootholdConfig:
     min_edge_margin_cells: int = 0
 
     def __post_init__(self) -> None:
-        if not self.search_radius >= 0 or self.stability_margin < 0:
-            raise ConfigError("search_radius and stability_margin must be >= 0")
+        require_non_negative(
+            "foothold", search_radius=self.search_radius, stability_margin=self.stability_margin
+        )
         if not 0 <= self.min_edge_margin_cells <= self.edge_margin_cells:
             raise ConfigError("edge margins need 0 <= min_edge_margin_cells <= edge_margin_cells")
 

@@ -29,6 +29,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy import ndimage
 
+from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
 from footfall.messages import WalkCommand
 from footfall.planning.route_kernels import dijkstra
@@ -80,30 +81,26 @@ class NavigationConfig:
     blocked_for_s: float = 30.0
 
     def __post_init__(self) -> None:
-        positive = (
-            self.goal_tolerance_m,
-            self.replan_period_s,
-            self.lookahead_m,
-            self.max_yaw_rate,
-            self.turn_in_place_rad,
-            self.blocked_after_s,
-            self.blocked_for_s,
-        )
         if not 0 <= self.switch_margin < 1:
             raise ConfigError(f"switch_margin must lie in [0, 1), got {self.switch_margin}")
-        if not all(math.isfinite(v) and v > 0 for v in positive):
-            raise ConfigError(
-                "navigation tolerances, periods, lookahead and rates must be positive"
-            )
-        others = (
-            self.escape_radius_m,
-            self.escape_cost,
-            self.yaw_gain,
-            self.blocked_radius_m,
-            self.blocked_ahead_m,
+        require_positive(
+            "navigation",
+            goal_tolerance_m=self.goal_tolerance_m,
+            replan_period_s=self.replan_period_s,
+            lookahead_m=self.lookahead_m,
+            max_yaw_rate=self.max_yaw_rate,
+            turn_in_place_rad=self.turn_in_place_rad,
+            blocked_after_s=self.blocked_after_s,
+            blocked_for_s=self.blocked_for_s,
         )
-        if not all(math.isfinite(v) and v >= 0 for v in others):
-            raise ConfigError("navigation escape, gain and blocked sizes must be numbers >= 0")
+        require_non_negative(
+            "navigation",
+            escape_radius_m=self.escape_radius_m,
+            escape_cost=self.escape_cost,
+            yaw_gain=self.yaw_gain,
+            blocked_radius_m=self.blocked_radius_m,
+            blocked_ahead_m=self.blocked_ahead_m,
+        )
         if self.confirm_no_route < 1:
             raise ConfigError(f"confirm_no_route must be >= 1, got {self.confirm_no_route}")
 

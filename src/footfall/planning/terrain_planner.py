@@ -15,8 +15,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
-from footfall.mapping.height_map import MapSnapshot
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.planning.footholds import (
     FootholdConfig,
     FootholdSearch,
@@ -60,13 +61,13 @@ class TerrainPlannerConfig:
     registration_horizon_s: float = 5.0
 
     def __post_init__(self) -> None:
-        if min(self.reach_margin, self.swing_clearance, self.min_body_clearance) < 0:
-            raise ConfigError("planner margins must be >= 0")
-        if not (math.isfinite(self.registration_horizon_s) and self.registration_horizon_s > 0):
-            raise ConfigError(
-                "registration_horizon_s must be a positive number of seconds, got "
-                f"{self.registration_horizon_s}"
-            )
+        require_non_negative(
+            "planner",
+            reach_margin=self.reach_margin,
+            swing_clearance=self.swing_clearance,
+            min_body_clearance=self.min_body_clearance,
+        )
+        require_positive("planner", registration_horizon_s=self.registration_horizon_s)
         if self.body_clearance < self.min_body_clearance:
             raise ConfigError("body_clearance must be at least min_body_clearance")
 

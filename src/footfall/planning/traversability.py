@@ -37,6 +37,7 @@ import numpy.typing as npt
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy import ndimage
 
+from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
 from footfall.messages import MapUpdate
 from footfall.robot.spec import HexapodSpec
@@ -77,26 +78,23 @@ class TraversabilityConfig:
     clearance_cost: float = 6.0
 
     def __post_init__(self) -> None:
-        lengths = (
-            self.max_rise_m,
-            self.wall_run_m,
-            self.support_radius_m,
-            self.clearance_m,
+        require_positive(
+            "traversability",
+            max_rise_m=self.max_rise_m,
+            wall_run_m=self.wall_run_m,
+            support_radius_m=self.support_radius_m,
+            clearance_m=self.clearance_m,
         )
-        if not all(math.isfinite(v) and v > 0 for v in lengths):
-            raise ConfigError(
-                "traversability lengths (max_rise_m, wall_run_m, support_radius_m, "
-                "clearance_m) must be positive"
-            )
-        if self.span_radius_m is not None and not (
-            math.isfinite(self.span_radius_m) and self.span_radius_m > 0
-        ):
-            raise ConfigError(f"span_radius_m must be positive, got {self.span_radius_m}")
+        if self.span_radius_m is not None:
+            require_positive("traversability", span_radius_m=self.span_radius_m)
         if not 0 < self.max_unsupported <= 1:
             raise ConfigError(f"max_unsupported must lie in (0, 1], got {self.max_unsupported}")
-        costs = (self.unsupported_cost, self.unknown_cost, self.clearance_cost)
-        if not all(math.isfinite(v) and v >= 0 for v in costs):
-            raise ConfigError("traversability costs must be numbers >= 0")
+        require_non_negative(
+            "traversability",
+            unsupported_cost=self.unsupported_cost,
+            unknown_cost=self.unknown_cost,
+            clearance_cost=self.clearance_cost,
+        )
 
 
 def span_radius(spec: HexapodSpec, margin_m: float = 0.05) -> float:

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from footfall.errors import ConfigError, DatasetError, FootfallError
-from footfall.mapping.height_map import HeightMapConfig
+from footfall.mapping.engine import HeightMapConfig
 from footfall.messages import DepthFrame, GroundPrior, PoseEstimate
 from footfall.messages.codec import Message
 from footfall.nodes.mapping import MappingNode

@@ -48,7 +48,8 @@ def faulty_walk(terrain: str, spec: str, seed: int = 0, seconds: float = 90.0):
         The :class:`~footfall.sim.walk.WalkResult`.
     """
     from footfall.robot.spec import load_spec
-    from footfall.sim.walk import WalkSettings, simulate_walk
+    from footfall.sim.walk import simulate_walk
+    from footfall.sim.walk_settings import WalkSettings
 
     settings = WalkSettings(
         terrain=terrain,
@@ -63,25 +64,30 @@ def faulty_walk(terrain: str, spec: str, seed: int = 0, seconds: float = 90.0):
 
 def _walk(job: Job) -> dict[str, object]:
     """One walk: ``(fault label, spec, terrain, seed, seconds)``."""
+    from footfall.sim.walk_metrics import WalkMetrics
+
     _, spec, terrain, seed, seconds = job
     m = faulty_walk(terrain, spec, seed, seconds).metrics
-    stopped = int(m.get("freezes", 0)) + int(m.get("stale_stops", 0))
-    caught = int(m.get("pose_jumps_detected", 0)) + int(m.get("frames_inconsistent", 0))
-    reached = bool(m["reached_goal"]) and not m["fell"]
+    assert isinstance(m, WalkMetrics)  # a simulated walk always walks
+    r = m.robustness
+    stopped = r.freezes + r.stale_stops
+    caught = (r.pose_jumps_detected or 0) + (m.mapping.frames_inconsistent if m.mapping else 0)
+    reached = m.reached_goal and not m.fell
+    invalid = m.footholds.invalid_footholds or 0
     return {
-        "success": reached and m["invalid_footholds"] == 0,
-        "fell": bool(m["fell"]),
-        "invalid_footholds": int(m["invalid_footholds"]),
-        "frozen": bool(m["frozen"]),
+        "success": reached and invalid == 0,
+        "fell": m.fell,
+        "invalid_footholds": invalid,
+        "frozen": m.outcome.frozen,
         "recovered": reached and (stopped + caught) > 0,
-        "wall_seconds": float(m["wall_seconds"]),
+        "wall_seconds": m.gait.wall_seconds,
     }
 
 
 def _map_error(job: tuple[str, int, bool, float]) -> float:
     """Height RMSE of a SLAM-noise survey, ``(terrain, seed, compensate, seconds)`` [m]."""
     from footfall.mapping.drift import DriftConfig
-    from footfall.mapping.height_map import HeightMapConfig
+    from footfall.mapping.engine import HeightMapConfig
     from footfall.robot.spec import load_spec
     from footfall.sim.survey import MappingSettings, simulate_mapping
 
@@ -136,13 +142,10 @@ def run_fault_benchmark(
         raise ConfigError(f"--seeds must be at least 1, got {seeds}")
     if jobs < 1:
         raise ConfigError(f"--jobs must be at least 1, got {jobs}")
-    from footfall.sim.terrain import TERRAIN_NAMES
+    from footfall.sim.terrains import TERRAINS
 
     for terrain in terrains:
-        if terrain not in TERRAIN_NAMES:
-            raise ConfigError(
-                f"unknown terrain {terrain!r}; choose from {', '.join(TERRAIN_NAMES)}"
-            )
+        TERRAINS.check(terrain)  # an unknown name is an error that lists the known ones
     for _, spec in faults:
         FaultSpec.parse(spec)
 

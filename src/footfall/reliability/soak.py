@@ -34,15 +34,17 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from footfall.errors import ConfigError
-from footfall.mapping.height_map import HeightMap, HeightMapConfig
+from footfall.mapping.engine import HeightMapConfig
+from footfall.mapping.height_map import HeightMap
 from footfall.messages import DepthFrame, GaitState, PoseEstimate, WalkCommand
 from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.runtime.bus import InProcessBus
 from footfall.runtime.scheduler import SimulatedScheduler
 from footfall.scoring.walkability import ScoreConfig, score_map
+from footfall.sim.assembly import SimRobot
 from footfall.sim.task import TerrainTask
-from footfall.sim.terrain import make_terrain
-from footfall.sim.walk import SimRobot, WalkSettings
+from footfall.sim.terrains import make_terrain
+from footfall.sim.walk_settings import WalkSettings
 
 # Rows of the per-tick record and touchdowns kept during a soak.
 LOG_TICKS = 2_000

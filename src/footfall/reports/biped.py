@@ -141,7 +141,7 @@ class ObstacleReport:
 
     def write(self, out: Path) -> list[Path]:
         """Write ``obstacles.json`` and ``obstacles.png`` to ``out``."""
-        from footfall.plots import plot_obstacles
+        from footfall.plots_biped import plot_obstacles
 
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "obstacles.json", out / "obstacles.png"]
@@ -192,7 +192,7 @@ class PlanReport:
 
     def write(self, out: Path) -> list[Path]:
         """Write ``plan.json`` and ``plan.png`` to ``out``."""
-        from footfall.plots import plot_plan
+        from footfall.plots_biped import plot_plan
 
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "plan.json", out / "plan.png"]

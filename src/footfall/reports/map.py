@@ -12,7 +12,8 @@ import numpy.typing as npt
 
 from footfall.errors import ConfigError, DatasetError
 from footfall.mapping.drift import DriftConfig
-from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
+from footfall.mapping.engine import HeightMapConfig
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.reports import write_json
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from footfall.errors import ConfigError
@@ -13,14 +13,16 @@ from footfall.reports import write_json
 from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.runtime.fault_spec import FaultSpec
 from footfall.sim.model import CameraMount
-from footfall.sim.terrain import TERRAIN_DIFFICULTY, Terrain, make_terrain
+from footfall.sim.terrain import Terrain
+from footfall.sim.terrains import TERRAINS, difficulty_parameters, make_terrain
 from footfall.sim.truth import TrueScores
-from footfall.sim.walk import WalkResult, WalkSettings, simulate_walk
+from footfall.sim.walk import simulate_walk
+from footfall.sim.walk_settings import WalkResult, WalkSettings
 
 # The walk's default speed [m/s], lowered to 3/4 of the gait's top speed where that is less.
 DEFAULT_SPEED_MPS = 0.10
-# Terrain parameters a walk may set, with the terrain each belongs to.
-TERRAIN_PARAMETERS = {"rise": "stairs", "groove": "cobblestones"}
+# Terrain parameters a walk may set by their own option (``--rise``, ``--groove``).
+TERRAIN_OPTIONS = ("rise", "groove")
 
 
 @dataclass(frozen=True)
@@ -42,7 +44,7 @@ class WalkRequest:
         seed: Terrain seed.
         rise: Stairs' step height [m], or None.
         groove: Cobblestones' groove width [m], or None.
-        difficulty: The terrain's difficulty parameter (see ``TERRAIN_DIFFICULTY``), or
+        difficulty: The terrain's difficulty parameter (``Terrain.difficulty``), or
             None for its default.
         straight: Walk the straight line to the goal (the thesis' behaviour) instead of
             planned routes.
@@ -52,6 +54,10 @@ class WalkRequest:
         rerun: An ``.rrd`` file to log the walk to for the rerun viewer.
         rerun_spawn: Open a rerun viewer on the walk.
         faults: Faults to inject, as ``footfall walk --faults`` writes them ("" for none).
+        backend: The robot backend (a name in ``BACKENDS``).
+        backend_options: Settings for the backend.
+        camera: The camera source (a name in ``CAMERAS``), or None to walk blind.
+        pose: The pose source (a name in ``POSES``).
     """
 
     terrain: str = "stairs"
@@ -76,6 +82,10 @@ class WalkRequest:
     rerun: Path | None = None
     rerun_spawn: bool = False
     faults: str = ""
+    backend: str = "sim"
+    backend_options: dict[str, str] = field(default_factory=dict)
+    camera: str | None = "sim"
+    pose: str = "sim"
 
 
 @dataclass(frozen=True)
@@ -120,18 +130,19 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
             "lower it or use a faster gait"
         )
     params = {}
-    for name, kind in TERRAIN_PARAMETERS.items():
+    owners = {parameter: terrain for terrain, parameter in difficulty_parameters().items()}
+    for name in TERRAIN_OPTIONS:
         value = getattr(request, name)
         if value is not None:
-            if request.terrain != kind:
-                raise ConfigError(f"--{name} applies to --terrain {kind} only")
+            if owners.get(name) != request.terrain:
+                raise ConfigError(f"--{name} applies to --terrain {owners.get(name)} only")
             params[name] = value
     if request.difficulty is not None:
-        name = TERRAIN_DIFFICULTY.get(request.terrain)
+        name = TERRAINS.get(request.terrain).difficulty
         if name is None:
             raise ConfigError(
                 f"terrain {request.terrain!r} has no difficulty parameter; terrains with one: "
-                f"{', '.join(TERRAIN_DIFFICULTY)}"
+                f"{', '.join(difficulty_parameters())}"
             )
         if name in params and params[name] != request.difficulty:
             raise ConfigError(f"--difficulty and --{name} disagree")
@@ -146,7 +157,7 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
         seconds=request.seconds,
         command=WalkCommand(speed=speed, body_height=height),
         gait=gait,
-        blind=request.blind,
+        blind=request.blind or request.camera is None,
         camera=CameraMount(width=width, height=image_height),
         control_rate_hz=request.control_rate_hz,
         seed=request.seed,
@@ -155,6 +166,10 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
         faults=FaultSpec.parse(request.faults),
         straight=request.straight,
         goal=request.goal,
+        backend=request.backend,
+        backend_options=dict(request.backend_options),
+        camera_source=request.camera or "sim",
+        pose_source=request.pose,
     )
     return WalkJob(request, spec, settings, terrain, params)
 
@@ -174,7 +189,7 @@ class WalkReport:
 
     def to_json(self) -> dict[str, object]:
         """The ``metrics.json`` content."""
-        metrics = dict(self.result.metrics)
+        metrics = self.result.metrics.to_json()
         metrics["mujoco_warnings"] = self.result.warnings
         metrics["terrain_params"] = self.job.terrain_params
         return metrics

@@ -39,8 +39,6 @@ from footfall.runtime.bus import Bus, Callback, Handler
 from footfall.runtime.fault_spec import FaultSpec, PoseJump
 from footfall.sensing.pose import Pose, SlamNoise
 
-# The topic the pose source publishes its raw estimates on, before the pose guard.
-RAW_POSE_TOPIC = "pose/raw"
 # A late control tick is late by one to this many periods.
 MAX_OVERRUN_PERIODS = 3
 # Side of one NaN or zero patch, as a fraction of the image's shorter side.
@@ -106,7 +104,7 @@ class FaultyLink:
     """
 
     def __init__(
-        self, bus: Bus, spec: FaultSpec, seed: int = 0, pose_topic: str = RAW_POSE_TOPIC
+        self, bus: Bus, spec: FaultSpec, seed: int = 0, pose_topic: str = PoseEstimate.RAW_TOPIC
     ) -> None:
         self.bus = bus
         self.spec = spec

@@ -31,9 +31,10 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
-from footfall.mapping.height_map import MapSnapshot
 from footfall.mapping.kernels import SUB
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.scoring import kernels
 
 
@@ -78,10 +79,10 @@ class ScoreConfig:
     def __post_init__(self) -> None:
         if self.kernel_size < 3 or self.kernel_size % 2 == 0:
             raise ConfigError(f"kernel_size must be odd and >= 3, got {self.kernel_size}")
-        if not (self.kernel_sigma > 0 and self.threshold > 0):
-            raise ConfigError("kernel_sigma and threshold must be positive")
-        if self.slope_weight < 0 or self.proximity_weight < 0:
-            raise ConfigError("score weights must be >= 0")
+        require_positive("score", kernel_sigma=self.kernel_sigma, threshold=self.threshold)
+        require_non_negative(
+            "score", slope_weight=self.slope_weight, proximity_weight=self.proximity_weight
+        )
         if self.shadow_points < 1:
             raise ConfigError(f"shadow_points must be >= 1, got {self.shadow_points}")
         if self.shadow_rim_cells < 1:

@@ -19,9 +19,9 @@ evidence of an edge, and fuses cells by a Kalman update weighted by it.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
+from footfall.checks import require_non_negative
 from footfall.errors import ConfigError
 
 
@@ -40,9 +40,12 @@ class DepthNoiseModel:
     offset_m: float = 0.0
 
     def __post_init__(self) -> None:
-        values = (self.base_m, self.quadratic_per_m, self.offset_m)
-        if not all(math.isfinite(v) and v >= 0 for v in values):
-            raise ConfigError(f"depth noise parameters must be finite and >= 0, got {values}")
+        require_non_negative(
+            "depth noise",
+            base_m=self.base_m,
+            quadratic_per_m=self.quadratic_per_m,
+            offset_m=self.offset_m,
+        )
 
     @property
     def is_ideal(self) -> bool:

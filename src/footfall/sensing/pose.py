@@ -8,7 +8,8 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
-from footfall.errors import ConfigError, InvalidPoseError
+from footfall.checks import require_non_negative
+from footfall.errors import InvalidPoseError
 
 # A quaternion whose norm is within this of 1 is normalised; farther off, it is refused.
 QUATERNION_NORM_TOLERANCE = 1e-3
@@ -120,15 +121,14 @@ class SlamNoiseConfig:
     angle_jitter: float = 0.002
 
     def __post_init__(self) -> None:
-        for name in (
-            "position_drift",
-            "yaw_drift",
-            "tilt_drift",
-            "position_jitter",
-            "angle_jitter",
-        ):
-            if getattr(self, name) < 0:
-                raise ConfigError(f"SLAM noise {name} must be >= 0")
+        require_non_negative(
+            "SLAM noise",
+            position_drift=self.position_drift,
+            yaw_drift=self.yaw_drift,
+            tilt_drift=self.tilt_drift,
+            position_jitter=self.position_jitter,
+            angle_jitter=self.angle_jitter,
+        )
 
 
 class SlamNoise:

@@ -6,6 +6,8 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from footfall.backends import BackendSetup
+from footfall.errors import ConfigError
 from footfall.messages import JointTargets, RobotState
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.spec import HexapodSpec
@@ -66,6 +68,18 @@ class MujocoHexapod:
         self._servo_gains = self.model.actuator_gainprm[:, 0].copy()
         self._servo_bias = self.model.actuator_biasprm[:, 1:3].copy()
         self.torque = True
+
+    @classmethod
+    def open(cls, setup: BackendSetup) -> MujocoHexapod:
+        """The simulated robot on ``setup.world`` (a terrain; flat when None).
+
+        ``setup.camera`` (a :class:`~footfall.sim.model.CameraMount`) goes on its body.
+        """
+        if setup.world is not None and not isinstance(setup.world, Terrain):
+            raise ConfigError(f"the simulator stands on a terrain, not {setup.world!r}")
+        if setup.camera is not None and not isinstance(setup.camera, CameraMount):
+            raise ConfigError(f"the simulator's camera is a CameraMount, not {setup.camera!r}")
+        return cls(setup.spec, setup.world, setup.camera, body_height=setup.body_height)
 
     @property
     def timestep(self) -> float:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from footfall.checks import require_positive
 from footfall.errors import ConfigError
 from footfall.robot.spec import HexapodSpec
 from footfall.sim.terrain import TerrainXml
@@ -54,8 +55,13 @@ class CameraMount:
     def __post_init__(self) -> None:
         if not (0 < self.horizontal_fov < math.pi and 0 < self.vertical_fov < math.pi):
             raise ConfigError("camera fields of view must lie between 0 and pi")
-        if not (self.width > 0 and self.height > 0 and self.rate_hz > 0 and self.max_range > 0):
-            raise ConfigError("camera size, rate and range must be positive")
+        require_positive(
+            "camera",
+            width=self.width,
+            height=self.height,
+            rate_hz=self.rate_hz,
+            max_range=self.max_range,
+        )
 
     @property
     def focal_lengths(self) -> tuple[float, float]:

@@ -20,9 +20,11 @@ from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bridge import Bridge
 from footfall.runtime.bus import Bus, InProcessBus
 from footfall.runtime.scheduler import WallClockScheduler
+from footfall.sim.assembly import SimRobot
 from footfall.sim.task import TerrainTask
-from footfall.sim.terrain import make_terrain
-from footfall.sim.walk import SimRobot, WalkResult, WalkSettings
+from footfall.sim.terrains import make_terrain
+from footfall.sim.walk_metrics import BridgeTraffic
+from footfall.sim.walk_settings import WalkResult, WalkSettings
 
 # What the robot sends out, and at most how often [Hz] (None: every message).
 OUTGOING: dict[str, float | None] = {
@@ -112,6 +114,5 @@ def run_robot(
     finally:
         robot.close()
     result = robot.result(judge, time.perf_counter() - wall_start, scheduler)
-    result.metrics["bridge_forwarded"] = dict(bridge.forwarded)
-    result.metrics["bridge_received"] = dict(bridge.received)
+    result.metrics.bridge = BridgeTraffic(dict(bridge.forwarded), dict(bridge.received))
     return result, bridge

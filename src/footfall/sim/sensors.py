@@ -14,8 +14,10 @@ from collections import deque
 
 from scipy.spatial.transform import Rotation
 
+from footfall.errors import ConfigError
 from footfall.messages import ColorImage, DepthFrame, PoseEstimate
 from footfall.nodes.mapping import TIMING_HISTORY
+from footfall.nodes.sources import SourceSetup
 from footfall.runtime.bus import Bus
 from footfall.sensing.pose import Pose, SlamNoise
 from footfall.sim.camera import SimDepthCamera
@@ -55,6 +57,15 @@ class SimCameraNode:
         self.render_ms: deque[float] = deque(maxlen=TIMING_HISTORY)
         self.frames = 0
         self._next_frame = 0.0
+
+    @classmethod
+    def open(cls, setup: SourceSetup) -> SimCameraNode:
+        """The camera of the simulated robot ``setup.backend``, mounted as ``setup.mount``."""
+        if not isinstance(setup.backend, MujocoHexapod):
+            raise ConfigError("the simulated camera renders the simulated robot: use --backend sim")
+        if not isinstance(setup.mount, CameraMount):
+            raise ConfigError("the simulated camera needs a CameraMount")
+        return cls(setup.bus, setup.backend, setup.mount, color=setup.color)
 
     def tick(self, t: float) -> bool:
         """Take and publish a frame if one is due at time ``t`` [s]; True when it did."""
@@ -110,6 +121,15 @@ class SimPoseNode:
         self.topic = topic
         self._body_in_camera = camera.camera_in_body.inverse()
         bus.subscribe(DepthFrame.TOPIC, self._on_depth)
+
+    @classmethod
+    def open(cls, setup: SourceSetup) -> SimPoseNode:
+        """The true pose of ``setup.camera`` (the simulated camera) at each of its images."""
+        if not isinstance(setup.camera, SimCameraNode):
+            raise ConfigError(
+                "the simulated pose source answers the simulated camera: --camera sim"
+            )
+        return cls(setup.bus, setup.camera, topic=PoseEstimate.RAW_TOPIC)
 
     def _on_depth(self, frame: DepthFrame) -> None:
         true_pose = self.camera.camera.pose(self.camera.backend.data)

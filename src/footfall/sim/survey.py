@@ -10,9 +10,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from footfall.checks import require_positive
 from footfall.control_loop import run_control_loop
 from footfall.errors import ConfigError
-from footfall.mapping.height_map import HeightMapConfig, MapSnapshot
+from footfall.mapping.engine import HeightMapConfig
+from footfall.mapping.snapshot import MapSnapshot
 from footfall.messages import WalkCommand
 from footfall.motion.gait import GaitConfig
 from footfall.motion.walker import WalkController
@@ -25,7 +27,8 @@ from footfall.sensing.pose import SlamNoise, SlamNoiseConfig
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.model import CameraMount
 from footfall.sim.sensors import SimCameraNode, SimPoseNode, true_body_pose
-from footfall.sim.terrain import Terrain, make_terrain
+from footfall.sim.terrain import Terrain
+from footfall.sim.terrains import make_terrain
 
 NOISE_MODELS = ("none", "slam")
 # A map cell within this many cells of a near-vertical wall is left out of the height error:
@@ -68,8 +71,7 @@ class MappingSettings:
             raise ConfigError(
                 f"unknown noise model {self.noise!r}; choose one of {', '.join(NOISE_MODELS)}"
             )
-        if not self.seconds > 0:
-            raise ConfigError(f"mapping seconds must be positive, got {self.seconds}")
+        require_positive("mapping", seconds=self.seconds)
 
 
 @dataclass(frozen=True)

@@ -21,39 +21,12 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
+from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import ConfigError
-
-TERRAIN_NAMES = (
-    "flat",
-    "stairs",
-    "cobblestones",
-    "course",
-    "stepping_stones",
-    "gaps",
-    "boxes",
-    "ramps",
-    "pits",
-    "obstacle_field",
-    "dead_end",
-)
-
-# The parameter of each terrain that sets its difficulty (what `footfall bench terrain`
-# sweeps and `footfall walk --difficulty` sets).
-TERRAIN_DIFFICULTY = {
-    "stairs": "rise",
-    "cobblestones": "groove",
-    "stepping_stones": "gap",
-    "gaps": "width",
-    "boxes": "box_height",
-    "ramps": "slope_deg",
-    "pits": "depth",
-    "obstacle_field": "density",
-    "dead_end": "length",
-}
 
 
 @dataclass(frozen=True)
@@ -87,11 +60,46 @@ class TerrainXml:
 
 
 class Terrain(ABC):
-    """A terrain: ground truth plus MJCF."""
+    """A terrain: ground truth plus MJCF, and how the benchmarks use it.
 
-    name: str
+    A new terrain is a subclass (a frozen dataclass whose fields are its parameters, with a
+    ``seed`` field if it is random) registered with one line in :mod:`footfall.sim.terrains`
+    (or ``register_terrain(MyTerrain)`` in your own code).
+
+    Attributes:
+        name: The name ``--terrain`` takes.
+        difficulty: The parameter that sets its difficulty (``footfall walk
+            --difficulty``, the one ``footfall bench terrain`` sweeps), or None.
+        sweep: The values of ``difficulty`` the terrain benchmark walks.
+        benchmarked: Whether ``footfall bench terrain`` walks it (once, at its defaults,
+            when it has no difficulty parameter).
+        has_route: Whether a route to the goal exists; where none does, a walk succeeds by
+            standing still and saying why.
+        start: Where a walk starts, facing +x [m].
+        goal: Where a walk ends [m].
+    """
+
+    name: ClassVar[str]
+    difficulty: ClassVar[str | None] = None
+    sweep: ClassVar[tuple[float, ...]] = ()
+    benchmarked: ClassVar[bool] = True
+    has_route: ClassVar[bool] = True
     start: tuple[float, float] = (0.0, 0.0)
     goal: tuple[float, float] = (4.0, 0.0)
+
+    @classmethod
+    def seeded(cls, seed: int = 0, **params: float) -> Terrain:
+        """The terrain laid out by ``seed`` (when it is random), with ``params`` set.
+
+        Raises:
+            ConfigError: On a parameter it does not have, or a value it refuses.
+        """
+        try:
+            if "seed" in {f.name for f in fields(cls)}:  # type: ignore[arg-type]
+                return cls(seed=seed, **params)  # type: ignore[call-arg]
+            return cls(**params)  # type: ignore[call-arg]
+        except TypeError as exc:
+            raise ConfigError(f"terrain {cls.name!r}: {exc}") from exc
 
     @abstractmethod
     def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
@@ -113,7 +121,8 @@ def box_xml(name: str, centre: tuple[float, float, float], half: tuple[float, fl
 class Flat(Terrain):
     """The floor, nothing else."""
 
-    name: str = "flat"
+    name: ClassVar[str] = "flat"
+    benchmarked: ClassVar[bool] = False
 
     def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Zero everywhere [m]."""
@@ -143,7 +152,9 @@ class Stairs(Terrain):
     landing: float = 0.5
     start_x: float = 0.6
     width: float = 1.5
-    name: str = "stairs"
+    name: ClassVar[str] = "stairs"
+    difficulty: ClassVar[str | None] = "rise"
+    sweep: ClassVar[tuple[float, ...]] = (0.02, 0.04, 0.06, 0.08)
 
     def __post_init__(self) -> None:
         if not (self.rise > 0 and self.tread > 0 and self.steps >= 1 and self.landing > 0):
@@ -158,6 +169,17 @@ class Stairs(Terrain):
     def goal(self) -> tuple[float, float]:  # type: ignore[override]
         """Half a metre past the last step."""
         return (self.end_x + 0.5, 0.0)
+
+    @classmethod
+    def seeded(cls, seed: int = 0, **params: float) -> Terrain:
+        """The staircase, its first step shifted by up to 10 cm by ``seed``.
+
+        Unless ``start_x`` is given: so footholds fall differently on every seed.
+        """
+        if "start_x" not in params:
+            shift = float(np.random.default_rng(seed).uniform(-0.1, 0.1))
+            params = {**params, "start_x": cls.start_x + shift}
+        return super().seeded(seed, **params)
 
     def _spans(self) -> list[tuple[float, float]]:
         return [
@@ -211,7 +233,9 @@ class Cobblestones(Terrain):
     start_x: float = 0.6
     length: float = 2.4
     width: float = 1.2
-    name: str = "cobblestones"
+    name: ClassVar[str] = "cobblestones"
+    difficulty: ClassVar[str | None] = "groove"
+    sweep: ClassVar[tuple[float, ...]] = (0.01, 0.03, 0.06)
     _tops: npt.NDArray[np.float64] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -275,7 +299,7 @@ class Course(Terrain):
     """
 
     sample: float = 0.01
-    name: str = "course"
+    name: ClassVar[str] = "course"
     x_range: tuple[float, float] = (-0.7, 3.5)
     y_range: tuple[float, float] = (-1.0, 1.0)
 
@@ -354,42 +378,3 @@ def height_field_xml(
         height_fields=(HeightField(name, elevation),),
         floor=False,
     )
-
-
-def make_terrain(name: str, seed: int = 0, **params: float) -> Terrain:
-    """A terrain by name (see ``TERRAIN_NAMES``), with optional parameters.
-
-    The seed lays the random terrains out, and shifts the staircase's first step by up to
-    10 cm (unless ``start_x`` is given), so that footholds fall differently on every seed.
-
-    Raises:
-        ConfigError: On an unknown name or parameter.
-    """
-    from footfall.sim import terrain_obstacles as obstacles
-    from footfall.sim import terrain_relief as relief
-
-    kinds: dict[str, type[Terrain]] = {
-        "flat": Flat,
-        "stairs": Stairs,
-        "cobblestones": Cobblestones,
-        "course": Course,
-        "stepping_stones": relief.SteppingStones,
-        "gaps": relief.Gaps,
-        "boxes": obstacles.Boxes,
-        "ramps": relief.Ramps,
-        "pits": relief.Pits,
-        "obstacle_field": obstacles.ObstacleField,
-        "dead_end": obstacles.DeadEnd,
-    }
-    if name not in kinds:
-        raise ConfigError(f"unknown terrain {name!r}; choose one of {', '.join(TERRAIN_NAMES)}")
-    kind = kinds[name]
-    try:
-        if name == "stairs" and "start_x" not in params:
-            shift = float(np.random.default_rng(seed).uniform(-0.1, 0.1))
-            params = {**params, "start_x": Stairs.start_x + shift}
-        if "seed" in {f.name for f in fields(kind)}:
-            return kind(seed=seed, **params)  # type: ignore[call-arg]
-        return kind(**params)
-    except TypeError as exc:
-        raise ConfigError(f"terrain {name!r}: {exc}") from exc

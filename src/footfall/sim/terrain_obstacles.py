@@ -17,6 +17,7 @@ floor), exact for the MuJoCo geometry.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -131,7 +132,9 @@ class Boxes(BoxTerrain):
     start_x: float = 0.6
     length: float = 2.4
     width: float = 1.6
-    name: str = "boxes"
+    name: ClassVar[str] = "boxes"
+    difficulty: ClassVar[str | None] = "box_height"
+    sweep: ClassVar[tuple[float, ...]] = (0.04, 0.08, 0.12)
     boxes: tuple[Box, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -182,7 +185,9 @@ class ObstacleField(BoxTerrain):
     start_x: float = 0.7
     length: float = 2.4
     width: float = 2.4
-    name: str = "obstacle_field"
+    name: ClassVar[str] = "obstacle_field"
+    difficulty: ClassVar[str | None] = "density"
+    sweep: ClassVar[tuple[float, ...]] = (0.1, 0.2, 0.3)
     blocks: tuple[Box, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -238,7 +243,10 @@ class DeadEnd(BoxTerrain):
     wall_height: float = 0.3
     wall_thickness: float = 0.1
     seed: int = 0
-    name: str = "dead_end"
+    name: ClassVar[str] = "dead_end"
+    difficulty: ClassVar[str | None] = "length"
+    sweep: ClassVar[tuple[float, ...]] = (1.8,)
+    has_route: ClassVar[bool] = False
     walls: tuple[Box, ...] = field(init=False, repr=False, compare=False)
     _goal: tuple[float, float] = field(init=False, repr=False, compare=False)
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -110,7 +111,9 @@ class SteppingStones(SunkenTerrain):
     start_x: float = 0.6
     length: float = 2.0
     field_width: float = 1.8
-    name: str = "stepping_stones"
+    name: ClassVar[str] = "stepping_stones"
+    difficulty: ClassVar[str | None] = "gap"
+    sweep: ClassVar[tuple[float, ...]] = (0.04, 0.08, 0.12)
     tops: tuple[Box, ...] = field(init=False, repr=False, compare=False)
 
     _end: float = field(init=False, repr=False, compare=False)
@@ -165,7 +168,9 @@ class Gaps(SunkenTerrain):
     seed: int = 0
     start_x: float = 0.6
     length: float = 2.0
-    name: str = "gaps"
+    name: ClassVar[str] = "gaps"
+    difficulty: ClassVar[str | None] = "width"
+    sweep: ClassVar[tuple[float, ...]] = (0.05, 0.1, 0.15)
     tops: tuple[Box, ...] = field(init=False, repr=False, compare=False)
     _goal_x: float = field(init=False, repr=False, compare=False)
 
@@ -216,7 +221,9 @@ class Pits(Terrain):
     length: float = 2.2
     width: float = 1.6
     sample: float = 0.01
-    name: str = "pits"
+    name: ClassVar[str] = "pits"
+    difficulty: ClassVar[str | None] = "depth"
+    sweep: ClassVar[tuple[float, ...]] = (0.05, 0.1, 0.2)
     pits: tuple[Box, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -275,7 +282,9 @@ class Ramps(Terrain):
     start_x: float = 0.7
     half_width: float = 1.5
     sample: float = 0.01
-    name: str = "ramps"
+    name: ClassVar[str] = "ramps"
+    difficulty: ClassVar[str | None] = "slope_deg"
+    sweep: ClassVar[tuple[float, ...]] = (10.0, 20.0, 30.0)
 
     def __post_init__(self) -> None:
         if not (0 < self.slope_deg < 60 and self.rise > 0 and self.landing > 0):

@@ -5,6 +5,8 @@ Which cells a foot may really use, and a walk's touchdowns and swing clearances 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import numpy.typing as npt
 
@@ -52,7 +54,7 @@ class TrueScores:
         return True
 
 
-def _touchdown_feet(log: WalkLog, min_step: float = 0.02) -> list[tuple[int, int]]:
+def touchdown_feet(log: WalkLog, min_step: float = 0.02) -> list[tuple[int, int]]:
     """(tick, leg) of every touchdown in the log that moved the foot at least ``min_step``.
 
     A foot put back where it lifted off is not a new foothold.
@@ -72,14 +74,36 @@ def _touchdown_feet(log: WalkLog, min_step: float = 0.02) -> list[tuple[int, int
     return sorted(out)
 
 
+@dataclass(frozen=True)
+class FootholdMetrics:
+    """The footholds of a walk against the terrain's truth.
+
+    Attributes:
+        touchdowns: Touchdowns that moved the foot at least 2 cm.
+        invalid_footholds: Touchdowns on cells the true terrain scores invalid; None when
+            the robot cannot say where its feet are (no truth can judge it).
+        min_clearance_m: Least height of a swinging foot's underside above the true
+            terrain [m] (NaN without a swing); None when the feet are not known.
+    """
+
+    touchdowns: int
+    invalid_footholds: int | None
+    min_clearance_m: float | None
+
+    @classmethod
+    def unjudged(cls, log: WalkLog) -> FootholdMetrics:
+        """The touchdowns of a robot that does not know where its feet are."""
+        return cls(len(touchdown_feet(log)), None, None)
+
+
 def foothold_metrics(
     log: WalkLog, terrain: Terrain, truth: TrueScores, foot_radius: float
-) -> dict[str, object]:
+) -> FootholdMetrics:
     """Invalid touchdowns (on cells the true terrain scores invalid) and swing clearance."""
     feet = log.array("feet_in_world")
     invalid = 0
     settle = 3  # ticks after touchdown, once the foot rests
-    for tick, leg in _touchdown_feet(log):
+    for tick, leg in touchdown_feet(log):
         k = min(tick + settle, len(feet) - 1)
         invalid += not truth.valid_at(feet[k, leg, :2])
     swinging = log.array("swinging")
@@ -111,8 +135,8 @@ def foothold_metrics(
                 axis=0,
             )
             clearance = min(clearance, float(np.min(p[:, 2] - r - under)))
-    return {
-        "touchdowns": len(_touchdown_feet(log)),
-        "invalid_footholds": invalid,
-        "min_clearance_m": clearance if np.isfinite(clearance) else float("nan"),
-    }
+    return FootholdMetrics(
+        touchdowns=len(touchdown_feet(log)),
+        invalid_footholds=invalid,
+        min_clearance_m=clearance if np.isfinite(clearance) else float("nan"),
+    )

@@ -10,37 +10,24 @@ worker thread so the page never waits for a plan), as ``footfall walk`` does; it
 still and says why when no route is open. Until a map has come (a robot without a camera)
 the command points straight at the goal. Either way it ends at the goal.
 
-It is one module: the page's widgets, the handlers that fill them and the loop that sends
-the commands share one station's state.
+What the robot says is kept by :class:`~footfall.station.inbox.RobotView` and drawn by
+:class:`~footfall.station.drawing.PageView`; this module holds the operator's controls and
+the loop that sends the commands.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections import deque
 from collections.abc import Callable
 
-import numpy as np
-
-from footfall.biped.planner import FOOT_LENGTH, FOOT_WIDTH
 from footfall.errors import FootfallError
 from footfall.messages import (
     Ack,
-    BipedPlan,
-    ColorImage,
-    DepthFrame,
-    EffectorTargets,
-    GaitStatus,
-    LogLine,
-    MapUpdate,
     Message,
     Mode,
     ModeCommand,
-    Obstacles,
     PlanningGoal,
-    RobotState,
-    Touchdown,
     Trigger,
     WalkCommand,
 )
@@ -48,22 +35,14 @@ from footfall.nodes.navigation import NavigatorNode
 from footfall.planning.navigation import NavigationConfig
 from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.runtime.zenoh_bus import ZenohBus
-from footfall.station.views import (
-    circles_segments,
-    depth_image,
-    feet_segments,
-    ground_point,
-    map_surface,
-    polyline_segments,
-    score_image,
-)
+from footfall.station.drawing import PageView
+from footfall.station.inbox import RobotView
+from footfall.station.views import ground_point
 
 # Commands and the mode repeat this often [Hz]: well inside the robot's 0.5 s watchdog.
 HEARTBEAT_HZ = 5.0
 # Images and the 3-D map are redrawn at most this often [Hz].
 DRAW_HZ = 5.0
-# The link counts as up while the last message is younger than this [s].
-LINK_TIMEOUT_S = 1.0
 # A clicked goal counts as reached within this distance [m].
 GOAL_TOLERANCE_M = 0.1
 DIRECTIONS = {"forward": 0.0, "left": 90.0, "back": 180.0, "right": -90.0}
@@ -79,6 +58,13 @@ class Station:
         biped: The biped's page (its services) rather than the hexapod's.
         spec: The hexapod (its legs' span sizes the routes' clearance); the default robot
             unless given.
+
+    Attributes:
+        robot: What the robot has said.
+        page: The page's read-outs and 3-D scene.
+        navigator: The route planner a clicked goal is walked to with (hexapod), or None.
+        mode: The mode sent.
+        goal: The clicked goal being walked to, or None.
     """
 
     def __init__(
@@ -103,45 +89,24 @@ class Station:
                 background=True,
             )
         )
-        self.obstacles: Obstacles | None = None
-        self.plan: BipedPlan | None = None
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.robot = RobotView()
         self.mode = Mode.TORQUE_OFF
         self.direction_deg = 0.0
         self.speed = 0.0
         self.goal: tuple[float, float] | None = None
-        self.last_heard = -math.inf
-        self.status: GaitStatus | None = None
-        self.state: RobotState | None = None
-        self.targets: EffectorTargets | None = None
-        self.depth: DepthFrame | None = None
-        self.color: ColorImage | None = None
-        self.map: MapUpdate | None = None
-        self.footholds: deque[np.ndarray] = deque(maxlen=120)
-        self.log: deque[str] = deque(maxlen=8)
         self._dirty = True
         self._next_beat = 0.0
         self._next_draw = 0.0
-        self._route_line = None
-        self._build_page()
-        for topic, handler in (
-            (GaitStatus.TOPIC, self._on_status),
-            (RobotState.TOPIC, self._on_state),
-            (EffectorTargets.TOPIC, self._on_targets),
-            (DepthFrame.TOPIC, self._on_depth),
-            (ColorImage.TOPIC, self._on_color),
-            (MapUpdate.TOPIC, self._on_map),
-            (Touchdown.TOPIC, self._on_touchdown),
-            (LogLine.TOPIC, self._on_log),
-            (Obstacles.TOPIC, self._on_obstacles),
-            (BipedPlan.TOPIC, self._on_plan),
-        ):
-            bus.subscribe(topic, handler)
+        self.page = PageView(self.server, biped)
+        self._build_controls()
+        self.page.add_readouts()
+        self._build_biped_controls()
+        self.robot.listen(bus)
 
-    # The page ----------------------------------------------------------------------------
-    def _build_page(self) -> None:
+    # The controls ------------------------------------------------------------------------
+    def _build_controls(self) -> None:
         gui = self.server.gui
-        self.link_text = gui.add_markdown("**link:** waiting for the robot")
         with gui.add_folder("mode", visible=not self.biped):
             for label, mode in (("torque off", Mode.TORQUE_OFF), ("walking", Mode.WALKING)):
                 button = gui.add_button(label)
@@ -156,12 +121,9 @@ class Station:
             self.yaw_slider = gui.add_slider("yaw rate [rad/s]", -0.5, 0.5, 0.05, 0.0)
             for slider in (self.speed_slider, self.height_slider, self.yaw_slider):
                 slider.on_update(lambda _event: self._changed())
-        self.status_text = gui.add_markdown("**status:** -")
-        self.pose_text = gui.add_markdown("**pose:** -")
-        self.depth_image = gui.add_image(np.zeros((24, 32, 3), np.uint8), label="depth")
-        self.color_image = gui.add_image(np.zeros((24, 32, 3), np.uint8), label="colour")
-        self.score_image = gui.add_image(np.zeros((32, 32, 3), np.uint8), label="score map")
-        self.log_text = gui.add_markdown("**log:** -")
+
+    def _build_biped_controls(self) -> None:
+        gui = self.server.gui
         if self.biped:
             with gui.add_folder("biped"):
                 for label, service in (
@@ -229,60 +191,22 @@ class Station:
     def _changed(self) -> None:
         self._dirty = True
 
-    # What the robot says -----------------------------------------------------------------
-    def _heard(self) -> None:
-        self.last_heard = time.monotonic()
-
-    def _on_status(self, m: GaitStatus) -> None:
-        self._heard()
-        self.status = m
-
-    def _on_state(self, m: RobotState) -> None:
-        self._heard()
-        self.state = m
-
-    def _on_targets(self, m: EffectorTargets) -> None:
-        self.targets = m
-
-    def _on_depth(self, m: DepthFrame) -> None:
-        self._heard()
-        self.depth = m
-
-    def _on_color(self, m: ColorImage) -> None:
-        self.color = m
-
-    def _on_map(self, m: MapUpdate) -> None:
-        self.map = m
-
-    def _on_touchdown(self, m: Touchdown) -> None:
-        self.footholds.append(np.asarray(m.chosen_in_world, dtype=np.float32))
-
-    def _on_obstacles(self, m: Obstacles) -> None:
-        self._heard()
-        self.obstacles = m
-
-    def _on_plan(self, m: BipedPlan) -> None:
-        self._heard()
-        self.plan = m
-
-    def _on_log(self, m: LogLine) -> None:
-        self.log.append(f"`{m.stamp:8.2f}` {m.node} {m.level}: {m.text}")
-
     # The loop ----------------------------------------------------------------------------
     def command(self) -> WalkCommand:
         """The walk command the controls (or the goal) ask for now."""
         height = float(self.height_slider.value)
         yaw_rate = float(self.yaw_slider.value)
-        if self.goal is not None and self.status is not None:
-            pose = self.status.body_pose
+        status = self.robot.status
+        if self.goal is not None and status is not None:
+            pose = status.body_pose
             dx, dy = self.goal[0] - pose.x, self.goal[1] - pose.y
             if math.hypot(dx, dy) < GOAL_TOLERANCE_M:
                 self._clear_goal()
                 return WalkCommand(speed=0.0, body_height=height)
             speed = float(self.speed_slider.value) or 0.1
-            if self.navigator is not None and self.map is not None:
+            if self.navigator is not None and self.robot.map is not None:
                 base = WalkCommand(speed=speed, body_height=height)
-                return self.navigator.command(time.monotonic(), self.status, base)
+                return self.navigator.command(time.monotonic(), status, base)
             c, s = math.cos(pose.yaw), math.sin(pose.yaw)
             direction = (c * dx + s * dy, -s * dx + c * dy)
             return WalkCommand(direction, speed, height, yaw_rate)
@@ -311,91 +235,12 @@ class Station:
             self._dirty = False
             self._next_beat = now + 1.0 / HEARTBEAT_HZ
         if now >= self._next_draw:
-            self._draw(now)
+            self.draw(now)
             self._next_draw = now + 1.0 / DRAW_HZ
 
-    def _draw(self, now: float) -> None:
-        age = now - self.last_heard
-        up = age < LINK_TIMEOUT_S
-        self.link_text.content = (
-            f"**link:** {'connected' if up else 'lost'}, last message "
-            + (f"{age:.2f} s ago" if math.isfinite(age) else "never")
-            + ("" if self.biped else f"; sending **{self.mode.value}**")
-        )
-        if self.status is not None:
-            s = self.status
-            why = f", **{s.frozen_reason}**" if s.frozen_reason else ""
-            leg = f" (leg {s.frozen_leg})" if s.frozen_leg else ""
-            route = ""
-            navigator = self.navigator
-            if self.goal is not None and navigator is not None and navigator.no_route is not None:
-                route = f"; **standing still: {navigator.no_route.reason}**"
-            self.status_text.content = (
-                f"**status:** {s.mode.value}, {s.state.value}{why}{leg}; "
-                f"{s.steps_taken} steps, {s.footholds_adjusted} footholds adjusted{route}"
-            )
-            p = s.body_pose
-            self.pose_text.content = (
-                f"**pose:** x {p.x:.3f} m, y {p.y:.3f} m, yaw {math.degrees(p.yaw):.1f} deg, "
-                f"body z {s.body_z:.3f} m"
-            )
-        if self.log:
-            self.log_text.content = "**log:**\n\n" + "\n\n".join(self.log)
-        scene = self.server.scene
-        if self.depth is not None:
-            self.depth_image.image = depth_image(self.depth)
-        if self.color is not None:
-            self.color_image.image = np.ascontiguousarray(self.color.image)
-        if self.map is not None:
-            self.score_image.image = score_image(self.map)
-            vertices, walkable, other = map_surface(self.map)
-            for name, faces, color in (
-                ("/map/walkable", walkable, (60, 180, 90)),
-                ("/map/invalid", other, (210, 50, 50)),
-            ):
-                if len(faces):
-                    scene.add_mesh_simple(name, vertices, faces, color=color, side="double")
-        if self.state is not None and self.status is not None:
-            p = self.status.body_pose
-            q = self.state.orientation_body_in_world.as_quat()  # x, y, z, w
-            scene.add_box(
-                "/robot/body",
-                color=(80, 120, 220),
-                dimensions=(0.26, 0.16, 0.05),
-                position=(p.x, p.y, self.status.body_z),
-                wxyz=(q[3], q[0], q[1], q[2]),
-            )
-        if self.targets is not None:
-            feet = np.asarray(self.targets.feet_in_world, dtype=np.float32)
-            colors = np.where(self.targets.swinging[:, None], [[250, 160, 0]], [[20, 20, 20]])
-            scene.add_point_cloud("/robot/feet", feet, colors.astype(np.uint8), point_size=0.04)
-        if self.footholds:
-            holds = np.stack(self.footholds)
-            scene.add_point_cloud("/footholds", holds, (0, 220, 0), point_size=0.025)
-        route = None if self.navigator is None or self.goal is None else self.navigator.route
-        if route is not None and len(route.points_in_world) >= 2:
-            self._route_line = scene.add_line_segments(
-                "/route", polyline_segments(route.points_in_world, 0.03), (30, 60, 230)
-            )
-        elif self._route_line is not None:
-            self._route_line.remove()
-            self._route_line = None
-        self._draw_biped()
-
-    def _draw_biped(self) -> None:
-        """Obstacles red, path blue, footsteps green, the COM black (the dissertation's)."""
-        scene = self.server.scene
-        if self.obstacles is not None:
-            o = self.obstacles
-            scene.add_line_segments(
-                "/biped/obstacles", circles_segments(o.x, o.y, o.r), (220, 30, 30)
-            )
-        if self.plan is not None:
-            p = self.plan
-            scene.add_line_segments("/biped/path", polyline_segments(p.waypoints), (30, 60, 230))
-            feet = feet_segments(p.footsteps, FOOT_LENGTH, FOOT_WIDTH)
-            scene.add_line_segments("/biped/footsteps", feet, (20, 170, 40))
-            scene.add_line_segments("/biped/com", polyline_segments(p.com, 0.02), (0, 0, 0))
+    def draw(self, now: float) -> None:
+        """Redraw the page from what the robot last said (``now``: ``time.monotonic()``)."""
+        self.page.draw(now, self.robot, self.mode, self.navigator, self.goal)
 
     def run(
         self,

@@ -1,0 +1,96 @@
+"""Camera and pose sources: the nodes that bring depth images and pose estimates in.
+
+A **camera source** publishes :class:`~footfall.messages.DepthFrame` on ``DepthFrame.TOPIC``
+(and, asked for colour, :class:`~footfall.messages.ColorImage`): depth in metres, NaN where
+nothing was measured, with the intrinsics and the optical frame in the body frame. The
+robot calls ``tick(t)`` every control tick; a source takes a frame when one is due (a
+simulator renders; a driver hands over the newest frame its device delivered) and stamps
+it with the time the image was taken.
+
+A **pose source** answers with :class:`~footfall.messages.PoseEstimate` on
+``PoseEstimate.RAW_TOPIC``, which the pose guard checks before the map and the controller
+use it. Its guarantees: the stamp is the depth image's; ``camera_in_world`` is the depth
+camera's optical frame and ``body_in_world`` the body frame, in a z-up world; one estimate
+per depth image (at least the camera's rate); a lost track publishes nothing (the robot
+stands once the newest estimate is 0.5 s old, and walks on when estimates return).
+
+Each kind joins its registry with one line; ``footfall robot --camera NAME --pose NAME``
+and :class:`~footfall.sim.walk.WalkSettings` choose by name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from footfall.backends import HexapodBackend
+from footfall.registry import Registry
+from footfall.runtime.bus import Bus
+
+
+@dataclass(frozen=True)
+class SourceSetup:
+    """What a camera or pose source is started with.
+
+    Attributes:
+        bus: Where it publishes (the robot's bus, or a faulty link in front of it).
+        backend: The robot (a simulator renders through it; a driver may read its clock).
+        mount: The camera's settings (a simulator's :class:`~footfall.sim.model.CameraMount`).
+        color: Publish colour images too (for a station).
+        camera: The camera source whose images a pose source answers; None for a camera.
+        options: Source-specific settings (a device's serial number, a SLAM's config).
+    """
+
+    bus: Bus
+    backend: HexapodBackend
+    mount: object = None
+    color: bool = False
+    camera: CameraSource | None = None
+    options: dict[str, str] | None = None
+
+
+class CameraSource(Protocol):
+    """A depth camera on the robot, as a node."""
+
+    def tick(self, t: float) -> bool:
+        """Publish a frame if one is due at ``t`` [s]; True when it did."""
+        ...
+
+    def timing(self) -> dict[str, float]:
+        """Timing figures for the walk's metrics (may be empty)."""
+        ...
+
+    def close(self) -> None:
+        """Release the device or renderer."""
+        ...
+
+
+class PoseSource(Protocol):
+    """A pose estimator on the robot, as a node.
+
+    It subscribes to what it needs when opened, and publishes ``PoseEstimate`` on
+    ``PoseEstimate.RAW_TOPIC``.
+    """
+
+
+class CameraFactory(Protocol):
+    """A registered camera source: a class (or any object) with ``open``."""
+
+    def open(self, setup: SourceSetup) -> CameraSource:
+        """The camera, publishing on ``setup.bus``."""
+        ...
+
+
+class PoseFactory(Protocol):
+    """A registered pose source: a class (or any object) with ``open``."""
+
+    def open(self, setup: SourceSetup) -> PoseSource:
+        """The pose source, answering ``setup.camera``'s images on ``setup.bus``."""
+        ...
+
+
+CAMERAS: Registry[CameraFactory] = Registry("camera source")
+POSES: Registry[PoseFactory] = Registry("pose source")
+
+CAMERAS.register("sim", "footfall.sim.sensors:SimCameraNode")
+POSES.register("sim", "footfall.sim.sensors:SimPoseNode")
