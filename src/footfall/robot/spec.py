@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
 from footfall.robots import read_description
 
@@ -92,10 +93,8 @@ class ServoGains:
     joint_damping: float = 0.2
 
     def __post_init__(self) -> None:
-        for name in ("kp", "kv", "max_torque"):
-            _require(getattr(self, name) > 0, f"servo {name} must be positive")
-        for name in ("armature", "joint_damping"):
-            _require(getattr(self, name) >= 0, f"servo {name} must be non-negative")
+        require_positive("servo", kp=self.kp, kv=self.kv, max_torque=self.max_torque)
+        require_non_negative("servo", armature=self.armature, joint_damping=self.joint_damping)
 
 
 @dataclass(frozen=True)
@@ -146,14 +145,20 @@ class HexapodSpec:
         _require(len(self.mounts) == NUM_LEGS, f"a hexapod has 6 legs, got {len(self.mounts)}")
         names = [m.name for m in self.mounts]
         _require(len(set(names)) == NUM_LEGS, f"leg names must be unique, got {names}")
-        for name in ("coxa_length", "femur_length", "tibia_length", "body_mass", "foot_radius"):
-            _require(getattr(self, name) > 0, f"{name} must be positive")
-        _require(all(s > 0 for s in self.body_size), "body_size entries must be positive")
-        _require(all(m > 0 for m in self.segment_masses), "segment masses must be positive")
+        require_positive(
+            "robot",
+            coxa_length=self.coxa_length,
+            femur_length=self.femur_length,
+            tibia_length=self.tibia_length,
+            body_mass=self.body_mass,
+            foot_radius=self.foot_radius,
+            body_height=self.body_height,
+            max_step_height=self.max_step_height,
+            stride_length=self.stride_length,
+            **{f"body_size[{k}]": s for k, s in enumerate(self.body_size)},
+            **{f"segment_masses[{k}]": m for k, m in enumerate(self.segment_masses)},
+        )
         _require(self.stance_radius > self.coxa_length, "stance_radius must exceed coxa_length")
-        _require(self.body_height > 0, "body_height must be positive")
-        _require(self.max_step_height > 0, "max_step_height must be positive")
-        _require(self.stride_length > 0, "stride_length must be positive")
         angles = np.unwrap(
             [math.atan2(m.position_in_body[1], m.position_in_body[0]) for m in self.mounts]
         )

@@ -62,7 +62,10 @@ class SimCameraNode:
     def open(cls, setup: SourceSetup) -> SimCameraNode:
         """The camera of the simulated robot ``setup.backend``, mounted as ``setup.mount``."""
         if not isinstance(setup.backend, MujocoHexapod):
-            raise ConfigError("the simulated camera renders the simulated robot: use --backend sim")
+            raise ConfigError(
+                "the simulated camera renders the simulated robot: use --backend sim, or "
+                "--camera none to walk blind"
+            )
         if not isinstance(setup.mount, CameraMount):
             raise ConfigError("the simulated camera needs a CameraMount")
         return cls(setup.bus, setup.backend, setup.mount, color=setup.color)
