@@ -9,15 +9,16 @@ False, so a plain "< 0" would not).
 from __future__ import annotations
 
 import math
+import numbers
 
 from footfall.errors import ConfigError
 
 
 def _number(value: object) -> float | None:
-    try:
-        number = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
+    """The value as a finite float, or None when it is not a finite real number."""
+    if not isinstance(value, numbers.Real):
         return None
+    number = float(value)
     return number if math.isfinite(number) else None
 
 
