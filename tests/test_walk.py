@@ -138,12 +138,12 @@ def test_skipped_ticks_keep_the_physics_on_the_controller_clock(default_spec):
     """When a wall-clock scheduler skips ticks, the robot lives through the gap (holding its
     targets): the simulator's time stays the controller's."""
     from footfall.runtime.bus import InProcessBus
-    from footfall.sim.assembly import SimRobot
+    from footfall.sim.assembly import WalkingRobot
     from footfall.sim.terrains import make_terrain
     from footfall.sim.walk_settings import WalkSettings
 
     settings = WalkSettings(terrain="flat", blind=True)
-    robot = SimRobot.build(default_spec, settings, make_terrain("flat"), InProcessBus())
+    robot = WalkingRobot.build(default_spec, settings, make_terrain("flat"), InProcessBus())
     start = robot.backend.data.time
     robot.step(0.0, 0.01)
     robot.step(0.05, 0.01)  # ticks 0.01 to 0.04 were skipped

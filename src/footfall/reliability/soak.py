@@ -41,7 +41,7 @@ from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.runtime.bus import InProcessBus
 from footfall.runtime.scheduler import SimulatedScheduler
 from footfall.scoring.walkability import ScoreConfig, score_map
-from footfall.sim.assembly import SimRobot
+from footfall.sim.assembly import WalkingRobot
 from footfall.sim.task import TerrainTask
 from footfall.sim.terrains import make_terrain
 from footfall.sim.walk_settings import WalkSettings
@@ -236,7 +236,7 @@ def run_soak(
     bus.subscribe(DepthFrame.TOPIC, lambda m: first.setdefault("frame", m))
     bus.subscribe(PoseEstimate.TOPIC, lambda m: first.setdefault("pose", m))
     ground = make_terrain(settings.terrain, seed=settings.seed)
-    robot = SimRobot.build(spec, settings, ground, bus, log_ticks=LOG_TICKS)
+    robot = WalkingRobot.build(spec, settings, ground, bus, log_ticks=LOG_TICKS)
     mapping = robot.mapping
     assert mapping is not None
     frame, pose = first["frame"], first["pose"]  # the robot's first frame and its pose

@@ -49,7 +49,7 @@ START_PRIOR_RADIUS = 0.6
 
 
 @dataclass
-class SimRobot:
+class WalkingRobot:
     """The hexapod's own nodes on a bus: camera, pose, mapping, movement, servo.
 
     The backend, the camera and the pose source are the ones the settings name in their
@@ -99,7 +99,7 @@ class SimRobot:
         command_timeout: float | None = None,
         color: bool = False,
         log_ticks: int | None = None,
-    ) -> SimRobot:
+    ) -> WalkingRobot:
         """Put the robot on the terrain, let it settle, and start its nodes on ``bus``.
 
         Blind, only the movement and servo nodes run; planned, the camera, pose, pose guard

@@ -20,7 +20,7 @@ from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bridge import Bridge
 from footfall.runtime.bus import Bus, InProcessBus
 from footfall.runtime.scheduler import WallClockScheduler
-from footfall.sim.assembly import SimRobot
+from footfall.sim.assembly import WalkingRobot
 from footfall.sim.task import TerrainTask
 from footfall.sim.terrains import make_terrain
 from footfall.sim.walk_metrics import BridgeTraffic
@@ -69,7 +69,7 @@ def run_robot(
     on_tick: Callable[[float], None] | None = None,
     should_stop: Callable[[], bool] | None = None,
     local: InProcessBus | None = None,
-    on_build: Callable[[SimRobot], None] | None = None,
+    on_build: Callable[[WalkingRobot], None] | None = None,
 ) -> tuple[WalkResult, Bridge]:
     """Run the simulated robot on the network until done.
 
@@ -89,7 +89,7 @@ def run_robot(
     walk = settings.walk
     terrain = make_terrain(walk.terrain, seed=walk.seed)
     local = local if local is not None else InProcessBus()
-    robot = SimRobot.build(
+    robot = WalkingRobot.build(
         spec, walk, terrain, local, command_timeout=settings.command_timeout, color=True
     )
     if on_build is not None:

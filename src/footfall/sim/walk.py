@@ -16,7 +16,7 @@ from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus, InProcessBus
 from footfall.runtime.faults import TickFaults
 from footfall.runtime.scheduler import SimulatedScheduler, WallClockScheduler
-from footfall.sim.assembly import SimRobot
+from footfall.sim.assembly import WalkingRobot
 from footfall.sim.task import TerrainTask
 from footfall.sim.terrain import Terrain
 from footfall.sim.terrains import make_terrain
@@ -30,7 +30,7 @@ def simulate_walk(
     on_tick: Callable[[float], None] | None = None,
     terrain: Terrain | None = None,
     bus: Bus | None = None,
-    on_build: Callable[[SimRobot], None] | None = None,
+    on_build: Callable[[WalkingRobot], None] | None = None,
 ) -> WalkResult:
     """Walk the robot across a terrain in MuJoCo, towards the terrain's goal.
 
@@ -52,7 +52,7 @@ def simulate_walk(
     """
     terrain = terrain or make_terrain(settings.terrain, seed=settings.seed)
     bus = bus if bus is not None else InProcessBus()
-    robot = SimRobot.build(spec, settings, terrain, bus)
+    robot = WalkingRobot.build(spec, settings, terrain, bus)
     if on_build is not None:
         on_build(robot)
     navigator = (
