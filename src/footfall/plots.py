@@ -268,8 +268,11 @@ def plot_footholds(
     return save_figure(fig, path)
 
 
-# Units of the swept difficulty parameters, for axis labels.
-_DIFFICULTY_UNITS = {"slope_deg": "deg", "density": "share of area"}
+def _difficulty_unit(terrain: str) -> str:
+    """The unit of a terrain's difficulty parameter, as the terrain declares it."""
+    from footfall.sim.terrains import TERRAINS
+
+    return TERRAINS.get(terrain).difficulty_unit if terrain in TERRAINS else "m"
 
 
 def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
@@ -306,7 +309,7 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
             value = sel_all[0]["value"]
             ax.set_xlabel("(single layout)" if difficulty == "none" else f"{difficulty} {value:g}")
         else:
-            ax.set_xlabel(f"{difficulty} [{_DIFFICULTY_UNITS.get(difficulty, 'm')}]")
+            ax.set_xlabel(f"{difficulty} [{_difficulty_unit(terrain)}]")
         ax.set_ylabel("success rate")
         ax.set_ylim(-0.05, 1.05)
         ax.grid(alpha=0.3)
@@ -318,6 +321,6 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
     )
     fig.suptitle(
         f"{bench['seeds']} seeds: {rates} (success: goal, no fall, no invalid foothold; "
-        "dead end: stood still and said why)"
+        "where no route exists: stood still and said why)"
     )
     return save_figure(fig, path)

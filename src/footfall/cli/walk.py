@@ -121,8 +121,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         type=float,
         help=(
             "the terrain's difficulty parameter: "
-            + ", ".join(f"{t} {n}" for t, n in difficulty_parameters().items())
-            + " (m, deg for slope_deg, a share for density)"
+            + ", ".join(
+                f"{t} {n} [{TERRAINS.get(t).difficulty_unit}]"
+                for t, n in difficulty_parameters().items()
+            )
         ),
     )
     p.add_argument(

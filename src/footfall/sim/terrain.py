@@ -70,6 +70,7 @@ class Terrain(ABC):
         name: The name ``--terrain`` takes.
         difficulty: The parameter that sets its difficulty (``footfall walk
             --difficulty``, the one ``footfall bench terrain`` sweeps), or None.
+        difficulty_unit: Its unit, for help texts and axis labels.
         sweep: The values of ``difficulty`` the terrain benchmark walks.
         benchmarked: Whether ``footfall bench terrain`` walks it (once, at its defaults,
             when it has no difficulty parameter).
@@ -81,6 +82,7 @@ class Terrain(ABC):
 
     name: ClassVar[str]
     difficulty: ClassVar[str | None] = None
+    difficulty_unit: ClassVar[str] = "m"
     sweep: ClassVar[tuple[float, ...]] = ()
     benchmarked: ClassVar[bool] = True
     has_route: ClassVar[bool] = True

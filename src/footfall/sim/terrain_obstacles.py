@@ -187,6 +187,7 @@ class ObstacleField(BoxTerrain):
     width: float = 2.4
     name: ClassVar[str] = "obstacle_field"
     difficulty: ClassVar[str | None] = "density"
+    difficulty_unit: ClassVar[str] = "share of area"
     sweep: ClassVar[tuple[float, ...]] = (0.1, 0.2, 0.3)
     blocks: tuple[Box, ...] = field(init=False, repr=False, compare=False)
 

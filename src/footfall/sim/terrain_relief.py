@@ -284,6 +284,7 @@ class Ramps(Terrain):
     sample: float = 0.01
     name: ClassVar[str] = "ramps"
     difficulty: ClassVar[str | None] = "slope_deg"
+    difficulty_unit: ClassVar[str] = "deg"
     sweep: ClassVar[tuple[float, ...]] = (10.0, 20.0, 30.0)
 
     def __post_init__(self) -> None:
