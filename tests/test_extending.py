@@ -180,6 +180,7 @@ def test_a_gait_that_leaves_a_leg_out_is_refused():
 class BodyStatePose:
     """Poses from the robot's own state: its body pose composed with the camera's mount."""
 
+    name = "body_state_pose"
     stamps: ClassVar[list[tuple[float, float]]] = []
 
     def __init__(self, setup: SourceSetup) -> None:

@@ -50,7 +50,13 @@ class SourceSetup:
 
 
 class CameraSource(Protocol):
-    """A depth camera on the robot, as a node."""
+    """A depth camera on the robot, as a node.
+
+    Attributes:
+        name: The node's name in logs.
+    """
+
+    name: str
 
     def tick(self, t: float) -> bool:
         """Publish a frame if one is due at ``t`` [s]; True when it did."""
@@ -70,7 +76,12 @@ class PoseSource(Protocol):
 
     It subscribes to what it needs when opened, and publishes ``PoseEstimate`` on
     ``PoseEstimate.RAW_TOPIC``.
+
+    Attributes:
+        name: The node's name in logs.
     """
+
+    name: str
 
 
 class CameraFactory(Protocol):
