@@ -182,6 +182,7 @@ class BodyStatePose:
 
     name = "body_state_pose"
     stamps: ClassVar[list[tuple[float, float]]] = []
+    options: ClassVar[list[dict[str, str]]] = []
 
     def __init__(self, setup: SourceSetup) -> None:
         self.setup = setup
@@ -190,6 +191,7 @@ class BodyStatePose:
     @classmethod
     def open(cls, setup: SourceSetup) -> BodyStatePose:
         """Answer the camera's images on the setup's bus."""
+        cls.options.append(dict(setup.options))
         return cls(setup)
 
     def _on_depth(self, frame: DepthFrame) -> None:
@@ -204,6 +206,7 @@ class BodyStatePose:
 def body_state_pose():
     POSES.register("toy_body_state", BodyStatePose)
     BodyStatePose.stamps.clear()
+    BodyStatePose.options.clear()
     yield
     POSES.unregister("toy_body_state")
 
@@ -212,12 +215,18 @@ def test_a_new_pose_source_places_the_maps_frames(body_state_pose):
     """A planned walk on the toy pose source maps every frame at the pose it publishes
     (stamped with the image's time) and crosses the flat floor with no invalid foothold."""
     settings = WalkSettings(
-        terrain="flat", seconds=6.0, blind=False, pose_source="toy_body_state", straight=True
+        terrain="flat",
+        seconds=6.0,
+        blind=False,
+        straight=True,
+        pose_source="toy_body_state",
+        pose_options={"frame": "body"},
     )
     result = simulate_walk(SPEC, settings)
     m = result.metrics.to_json()
     assert m["frames"] >= 60 and m["frames_skipped_no_pose"] == 0
     assert len(BodyStatePose.stamps) >= m["frames"]
+    assert BodyStatePose.options == [{"frame": "body"}]  # its settings reached it
     assert m["distance_m"] > 0.3 and not m["fell"] and m["invalid_footholds"] == 0
 
 

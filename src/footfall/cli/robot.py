@@ -102,6 +102,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--pose", choices=POSES.names(), default="sim", help="the pose source placing the images"
     )
+    for kind, example in (("camera", "a device's serial number"), ("pose", "a map file")):
+        p.add_argument(
+            f"--{kind}-option",
+            action="append",
+            default=[],
+            metavar="KEY=VALUE",
+            help=f"a setting for the {kind} source ({example}); repeatable",
+        )
     p.add_argument("--seconds", type=float, default=600.0, help="longest run in seconds")
     p.add_argument("--stop-at-goal", action="store_true", help="end the run at the goal")
     p.add_argument(
@@ -156,12 +164,12 @@ def _rates(items: list[str]) -> dict[str, float | None]:
     return rates
 
 
-def _options(items: list[str]) -> dict[str, str]:
+def _options(option: str, items: list[str]) -> dict[str, str]:
     options = {}
     for item in items:
         key, sep, value = item.partition("=")
         if not key or not sep:
-            raise ConfigError(f"--backend-option {item!r}: use KEY=VALUE")
+            raise ConfigError(f"{option} {item!r}: use KEY=VALUE")
         options[key] = value
     return options
 
@@ -193,7 +201,9 @@ def run(args: argparse.Namespace, console: Console) -> int:
             rerun=args.rerun,
             rerun_spawn=args.rerun_spawn,
             backend=args.backend,
-            backend_options=_options(args.backend_option),
+            backend_options=_options("--backend-option", args.backend_option),
+            camera_options=_options("--camera-option", args.camera_option),
+            pose_options=_options("--pose-option", args.pose_option),
             camera=None if args.camera == "none" else args.camera,
             pose=args.pose,
         ),

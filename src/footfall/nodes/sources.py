@@ -20,7 +20,7 @@ and :class:`~footfall.sim.walk.WalkSettings` choose by name.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol
 
 from footfall.backends import HexapodBackend
@@ -46,7 +46,7 @@ class SourceSetup:
     mount: object = None
     color: bool = False
     camera: CameraSource | None = None
-    options: dict[str, str] | None = None
+    options: dict[str, str] = field(default_factory=dict)
 
 
 class CameraSource(Protocol):

@@ -123,7 +123,9 @@ def registration_margin_cells(error_m: float, resolution: float) -> int:
     """
     if not (math.isfinite(error_m) and error_m > 0.5 * resolution):
         return 0
-    return min(math.ceil(error_m / resolution - 0.5), MAX_SEARCH_CELLS)
+    # A billionth of a cell of slack: an error that is an exact multiple of half cells
+    # divides a hair above it (0.07 / 0.02 = 3.5000000000000004) and would cost a cell.
+    return min(math.ceil(error_m / resolution - 0.5 - 1e-9), MAX_SEARCH_CELLS)
 
 
 def _eroded(valid: npt.NDArray[np.bool_], cells: int) -> npt.NDArray[np.bool_]:

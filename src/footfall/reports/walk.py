@@ -58,6 +58,8 @@ class WalkRequest:
         backend_options: Settings for the backend.
         camera: The camera source (a name in ``CAMERAS``), or None to walk blind.
         pose: The pose source (a name in ``POSES``).
+        camera_options: Settings for the camera source.
+        pose_options: Settings for the pose source.
     """
 
     terrain: str = "stairs"
@@ -86,6 +88,8 @@ class WalkRequest:
     backend_options: dict[str, str] = field(default_factory=dict)
     camera: str | None = "sim"
     pose: str = "sim"
+    camera_options: dict[str, str] = field(default_factory=dict)
+    pose_options: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -170,6 +174,8 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
         backend_options=dict(request.backend_options),
         camera_source=request.camera or "sim",
         pose_source=request.pose,
+        camera_options=dict(request.camera_options),
+        pose_options=dict(request.pose_options),
     )
     return WalkJob(request, spec, settings, terrain, params)
 

@@ -127,10 +127,18 @@ class WalkingRobot:
             )
             sensors: Bus = link if link is not None else bus
             camera = CAMERAS.get(settings.camera_source).open(
-                SourceSetup(sensors, backend, settings.camera, color=color)
+                SourceSetup(
+                    sensors, backend, settings.camera, color, options=dict(settings.camera_options)
+                )
             )
             POSES.get(settings.pose_source).open(
-                SourceSetup(sensors, backend, settings.camera, camera=camera)
+                SourceSetup(
+                    sensors,
+                    backend,
+                    settings.camera,
+                    camera=camera,
+                    options=dict(settings.pose_options),
+                )
             )
             guard = PoseGuardNode(bus)
             if standing.feet_in_world is not None:

@@ -59,6 +59,8 @@ class WalkSettings:
         backend_options: Settings for the backend (``--backend-option KEY=VALUE``).
         camera_source: The depth camera (a name in ``CAMERAS``) planned walking maps with.
         pose_source: The pose source (a name in ``POSES``) that places the camera's images.
+        camera_options: Settings for the camera source (``--camera-option KEY=VALUE``).
+        pose_options: Settings for the pose source (``--pose-option KEY=VALUE``).
     """
 
     terrain: str = "flat"
@@ -86,6 +88,8 @@ class WalkSettings:
     backend_options: dict[str, str] = field(default_factory=dict)
     camera_source: str = "sim"
     pose_source: str = "sim"
+    camera_options: dict[str, str] = field(default_factory=dict)
+    pose_options: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         # An unknown name is an error that lists the known ones.
