@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -186,20 +187,20 @@ class GaitConfig:
             height_rate_limit=self.height_rate_limit,
         )
 
-    @property
+    @cached_property
     def gait(self) -> Gait:
-        """The gait ``kind`` names."""
+        """The gait ``kind`` names (looked up once: the scheduler asks every tick)."""
         return GAITS.get(self.kind)
 
     @property
     def groups(self) -> tuple[tuple[int, ...], ...]:
         """Swing groups in stepping order."""
-        return swing_groups(self.kind)
+        return self.gait.groups
 
     @property
     def duty_factor(self) -> float:
         """Support fraction of each leg's cycle."""
-        return duty_factor(self.kind)
+        return self.gait.duty_factor
 
     @property
     def stride(self) -> float:
