@@ -29,7 +29,9 @@ from footfall.messages import (
     Obstacles,
     PlanningGoal,
     PoseEstimate,
+    Posture,
     RobotState,
+    ServoStatus,
     Touchdown,
     Trigger,
     WalkCommand,
@@ -128,6 +130,10 @@ def examples(rng: np.random.Generator) -> list:
         ),
         Touchdown(4.5, 2, rng.normal(size=3), rng.normal(size=3)),
         LogLine(5.0, "mapping", "warning", "depth frame 3: skipped — no pose ✓"),
+        ServoStatus(
+            5.5, Posture.HALTED, "servo 5 (LM femur): overheating", *rng.normal(size=(3, 18))
+        ),
+        ServoStatus(5.6, Posture.RISING),
         Obstacles(1.0, rng.normal(size=4), rng.normal(size=4), rng.uniform(0.1, 1, 4)),
         BipedPlan(
             2.0,

@@ -21,6 +21,7 @@ from footfall.messages import (
     PoseEstimate,
     WalkCommand,
 )
+from footfall.motion.posture import sitting_height
 from footfall.motion.walker import WalkController
 from footfall.nodes import mapping as mapping_module
 from footfall.nodes.mapping import MappingNode, scores_of, snapshot_of
@@ -156,16 +157,27 @@ def test_late_commands_are_dropped_and_counted(default_spec):
     assert robot.graph.movement.command.speed == 0.05
 
 
-def test_back_to_torque_off_goes_limp(default_spec):
-    """Torque-off while walking makes the servos limp and stops the joint targets."""
+def test_back_to_torque_off_sits_down_then_goes_limp(default_spec):
+    """Torque-off while walking lowers the body onto its belly at bounded joint rates, then
+    makes the servos limp and stops the joint targets."""
     robot = Robot(default_spec)
     robot.bus.publish(ModeCommand.TOPIC, ModeCommand(Mode.WALKING))
     robot.run(1.0, WALK)
     sent = len(robot.joint_targets)
     robot.bus.publish(ModeCommand.TOPIC, ModeCommand(Mode.TORQUE_OFF))
-    robot.run(1.0, WALK)
+    robot.run(0.2, WALK)
+    assert robot.backend.torque is True  # still lowering
+    robot.run(2.0, WALK)
     assert robot.backend.torque is False
-    assert len(robot.joint_targets) == sent
+    sitting = robot.joint_targets[sent:]
+    assert len(sitting) > 50
+    rates = np.abs(np.diff([t.positions for t in sitting], axis=0)) / DT
+    assert rates.max() <= default_spec.servo.max_rate + 1e-9
+    feet = robot.graph.servo.kinematics.forward_in_body(sitting[-1].positions)
+    assert np.allclose(feet[:, 2], -sitting_height(default_spec) + default_spec.foot_radius)
+    done = len(robot.joint_targets)
+    robot.run(0.5, WALK)
+    assert len(robot.joint_targets) == done
 
 
 CAMERA = PinholeCamera(50.0, 50.0, 15.5, 11.5, 32, 24, 0.05, 5.0)

@@ -184,13 +184,14 @@ class WalkingGraph:
         """
         recorder = WalkRecorder(bus, log_ticks)
         movement = MovementNode(bus, controller, command_timeout=command_timeout)
-        servo = ServoNode(bus, controller.spec, backend)
+        servo = ServoNode(bus, controller.spec, backend, stand_height=controller.height)
         servo.publish_state()
         return cls(bus, backend, movement, servo, recorder)
 
     def step(self, t: float, dt: float) -> None:
         """One control tick at ``t``, then the robot advances ``dt`` [s] and reports."""
         self.movement.tick(t)
+        self.servo.tick(t, dt)
         self.backend.advance(dt)
         self.servo.publish_state()
         self.recorder.record(t + dt)

@@ -13,3 +13,5 @@ BACKENDS: Registry[BackendFactory] = Registry("robot backend")
 
 BACKENDS.register("sim", "footfall.sim.hexapod:MujocoHexapod")
 BACKENDS.register("mock", "footfall.backends.mock:MockHexapod")
+BACKENDS.register("dynamixel", "footfall.hardware.dynamixel:DynamixelHexapod")
+BACKENDS.register("servo-bus", "footfall.hardware.servo_bus:ServoBusHexapod")

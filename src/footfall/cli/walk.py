@@ -14,6 +14,7 @@ from footfall.cli.common import (
     sim_progress,
     wrote,
 )
+from footfall.errors import ConfigError
 from footfall.motion.gait import GAITS
 from footfall.motion.swing import SWINGS
 from footfall.robot.spec import BUILTIN_ROBOTS
@@ -162,6 +163,23 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
             "periods)"
         ),
     )
+    p.add_argument(
+        "--servo-bus",
+        choices=("protocol1", "protocol2"),
+        help=(
+            "drive the simulated robot's joints through an emulated Dynamixel bus on a "
+            "pseudo-terminal (dynamixel-sdk on one end, emulated servos on the other), with "
+            "the robot's [hardware] table or, without one, AX-12A (protocol1) or XM430-W350 "
+            "(protocol2) servos; metrics.json gains servo_bus"
+        ),
+    )
+    p.add_argument(
+        "--servo-fault",
+        action="append",
+        default=[],
+        metavar="KIND:ID@SECONDS",
+        help="with --servo-bus: a servo fault (silent, overheat, checksum, port); repeatable",
+    )
     add_recording_options(p)
     p.add_argument("--out", type=Path, default=Path("footfall-out/walk"), help="output folder")
     p.set_defaults(handler=run)
@@ -171,6 +189,15 @@ def run(args: argparse.Namespace, console: Console) -> int:
     """Walk, write the outputs, print the summary."""
     from footfall.reports.walk import WalkRequest, prepare_walk, run_walk
 
+    backend, options = "sim", {}
+    if args.servo_bus is not None:
+        backend = "servo-bus"
+        options = {"protocol": args.servo_bus.removeprefix("protocol"), "robot": args.robot}
+        options["control_period"] = str(1.0 / args.control_rate)
+        if args.servo_fault:
+            options["fault"] = ",".join(args.servo_fault)
+    elif args.servo_fault:
+        raise ConfigError("--servo-fault goes with --servo-bus")
     job = prepare_walk(
         WalkRequest(
             terrain=args.terrain,
@@ -195,6 +222,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
             rerun=args.rerun,
             rerun_spawn=args.rerun_spawn,
             faults=args.faults,
+            backend=backend,
+            backend_options=options,
         )
     )
     if args.blind:

@@ -9,6 +9,8 @@ from footfall.messages.biped import Trigger as Trigger
 from footfall.messages.codec import Message as Message
 from footfall.messages.codec import decode as decode
 from footfall.messages.codec import message_types as message_types
+from footfall.messages.servo import Posture as Posture
+from footfall.messages.servo import ServoStatus as ServoStatus
 from footfall.messages.types import ColorImage as ColorImage
 from footfall.messages.types import DepthFrame as DepthFrame
 from footfall.messages.types import EffectorTargets as EffectorTargets
@@ -44,7 +46,9 @@ __all__ = [
     "Obstacles",
     "PlanningGoal",
     "PoseEstimate",
+    "Posture",
     "RobotState",
+    "ServoStatus",
     "Touchdown",
     "Trigger",
     "WalkCommand",

@@ -25,7 +25,9 @@ from footfall.messages import (
     Mode,
     ModeCommand,
     PoseEstimate,
+    Posture,
     RobotState,
+    ServoStatus,
     Touchdown,
     WalkCommand,
 )
@@ -64,6 +66,8 @@ class MovementNode:
         self.command: WalkCommand | None = None
         self.state: RobotState | None = None
         self.stop_reason = ""
+        self.halted = ""  # why the robot cannot go on (a servo fault), or ""
+        self.posture = Posture.STANDING  # the servo node's, once it reports
         self._mode_stamp: float | None = None
         self._time = 0.0
         self._command_time = -math.inf
@@ -78,6 +82,7 @@ class MovementNode:
         bus.subscribe(ModeCommand.TOPIC, self._on_mode, last=True)
         bus.subscribe(WalkCommand.TOPIC, self._on_command, last=True)
         bus.subscribe(RobotState.TOPIC, self._on_state, last=True)
+        bus.subscribe(ServoStatus.TOPIC, self._on_servo, last=True)
         if controller.planner is not None:
             bus.subscribe(MapUpdate.TOPIC, self._on_map, last=True)
             bus.subscribe(PoseEstimate.TOPIC, self._on_pose)
@@ -99,6 +104,14 @@ class MovementNode:
             # No time passed for the controller while limp; it stands up from where it lies.
             self.controller.restart_clock(self.state)
         self.mode = message.mode
+
+    def _on_servo(self, message: ServoStatus) -> None:
+        if message.posture is Posture.HALTED:
+            self.halt(message.fault)
+        elif message.posture is Posture.STANDING and self.posture is not Posture.STANDING:
+            # No time passed for the controller while the legs rose; it walks from here.
+            self.controller.restart_clock(self.state)
+        self.posture = message.posture
 
     def _on_command(self, message: WalkCommand) -> None:
         if self._late(message, self.command.stamp if self.command is not None else None):
@@ -164,11 +177,18 @@ class MovementNode:
         self.controller.holding = False
         return self.command
 
+    def halt(self, reason: str) -> None:
+        """Stop for good: the robot cannot go on (a servo fault); the status says why."""
+        if not self.halted:
+            self.halted = reason
+            self.publish_status()
+
     def tick(self, t: float) -> None:
         """One control tick at controller time ``t`` [s]."""
         self._time = t
         command = self._command_now(t)
-        if self.mode is not Mode.WALKING or command is None:
+        walking = self.mode is Mode.WALKING and self.posture is Posture.STANDING
+        if not walking or command is None or self.halted:
             self.publish_status()
             return
         c = self.controller
@@ -193,14 +213,14 @@ class MovementNode:
     def publish_status(self) -> GaitStatus:
         """Publish the gait status now; returns it."""
         c = self.controller
-        frozen = c.state is GaitState.FROZEN
-        reason = c.frozen_reason if frozen else self.stop_reason
+        frozen = c.state is GaitState.FROZEN or bool(self.halted)
+        reason = self.halted or (c.frozen_reason if frozen else self.stop_reason)
         status = GaitStatus(
             stamp=self._time,
             mode=self.mode,
-            state=c.state,
+            state=GaitState.FROZEN if frozen else c.state,
             frozen_reason=reason,
-            frozen_leg=c.frozen_leg if frozen else "",
+            frozen_leg=c.frozen_leg if frozen and not self.halted else "",
             body_pose=c.pose,
             body_z=c.height,
             steps_taken=c.scheduler.steps_taken,

@@ -84,6 +84,8 @@ class ServoGains:
         max_torque: Saturation torque [N m].
         armature: Reflected rotor inertia [kg m^2].
         joint_damping: Passive joint damping [N m s / rad].
+        max_rate: Fastest the servos turn [rad/s]: standing up and sitting down stay
+            under it (the joint targets' rates are measured against it).
     """
 
     kp: float = 60.0
@@ -91,9 +93,12 @@ class ServoGains:
     max_torque: float = 6.0
     armature: float = 0.005
     joint_damping: float = 0.2
+    max_rate: float = 4.0
 
     def __post_init__(self) -> None:
-        require_positive("servo", kp=self.kp, kv=self.kv, max_torque=self.max_torque)
+        require_positive(
+            "servo", kp=self.kp, kv=self.kv, max_torque=self.max_torque, max_rate=self.max_rate
+        )
         require_non_negative("servo", armature=self.armature, joint_damping=self.joint_damping)
 
 

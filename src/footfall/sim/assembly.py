@@ -183,9 +183,12 @@ class WalkingRobot:
             self.camera.tick(t + dt)
 
     def close(self) -> None:
-        """Release the renderer."""
+        """Release the renderer, and the backend's port or device (one that has them)."""
         if self.camera is not None:
             self.camera.close()
+        close = getattr(self.backend, "close", None)
+        if callable(close):
+            close()
 
     def warnings(self) -> dict[str, int]:
         """The simulator's warnings by name (none from a backend that keeps no such count)."""
@@ -235,6 +238,9 @@ class WalkingRobot:
             ),
             robustness=self._robustness(log),
         )
+        bus = getattr(self.backend, "bus_metrics", None)
+        if callable(bus):
+            metrics.servo_bus = bus()
         if self.mapping is not None and self.camera is not None:
             metrics.mapping = MappingMetrics(
                 frames=self.mapping.frames,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from footfall.backends import BackendSetup
@@ -117,6 +118,32 @@ class MujocoHexapod:
         self.model.actuator_gainprm[:, 0] = on * self._servo_gains
         self.model.actuator_biasprm[:, 1:3] = on * self._servo_bias
 
+    def drive(
+        self,
+        positions: npt.ArrayLike,
+        rates: npt.ArrayLike,
+        torque: npt.ArrayLike,
+    ) -> None:
+        """Per-joint servo set-points [rad], their rates [rad/s] and torque on or off.
+
+        For servos emulated joint by joint (:mod:`footfall.hardware.servo_bus`): a joint
+        whose torque is off goes limp.
+        """
+        on = np.asarray(torque, dtype=float).ravel()
+        self.data.ctrl[:] = np.ravel(positions) + self._feedforward_gain * np.ravel(rates)
+        self.model.actuator_gainprm[:, 0] = on * self._servo_gains
+        self.model.actuator_biasprm[:, 1:3] = on[:, None] * self._servo_bias
+        self.torque = bool(on.any())
+
+    def joints(self) -> tuple[npt.NDArray[np.float64], ...]:
+        """Joint angles [rad], rates [rad/s] and servo torques [N m], shape (18,) each."""
+        d = self.data
+        return (
+            d.qpos[self._qpos_index].copy(),
+            d.qvel[self._qvel_index].copy(),
+            d.actuator_force.copy(),
+        )
+
     def advance(self, duration: float) -> None:
         """Step the physics for ``duration`` seconds (rounded to whole time steps)."""
         steps = max(1, round(duration / self.timestep))
@@ -133,3 +160,11 @@ class MujocoHexapod:
     def body_height_above(self, ground_height: float = 0.0) -> float:
         """Body frame height above a ground level [m] (ground truth)."""
         return float(self.data.xpos[self._torso][2] - ground_height)
+
+
+def simulated_robot(backend: object) -> MujocoHexapod | None:
+    """The MuJoCo robot behind a backend: itself, or the one it wraps (``.simulator``)."""
+    if isinstance(backend, MujocoHexapod):
+        return backend
+    simulator = getattr(backend, "simulator", None)
+    return simulator if isinstance(simulator, MujocoHexapod) else None

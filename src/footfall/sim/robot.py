@@ -38,6 +38,7 @@ OUTGOING: dict[str, float | None] = {
     "effector_targets": 20.0,
     "joint_targets": 20.0,
     "touchdown": None,
+    "servo": None,
 }
 INCOMING = ("command", "mode")
 

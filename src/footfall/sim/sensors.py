@@ -21,7 +21,7 @@ from footfall.nodes.sources import SourceSetup
 from footfall.runtime.bus import Bus
 from footfall.sensing.pose import Pose, SlamNoise
 from footfall.sim.camera import SimDepthCamera
-from footfall.sim.hexapod import MujocoHexapod
+from footfall.sim.hexapod import MujocoHexapod, simulated_robot
 from footfall.sim.model import CameraMount
 
 
@@ -61,14 +61,15 @@ class SimCameraNode:
     @classmethod
     def open(cls, setup: SourceSetup) -> SimCameraNode:
         """The camera of the simulated robot ``setup.backend``, mounted as ``setup.mount``."""
-        if not isinstance(setup.backend, MujocoHexapod):
+        simulator = simulated_robot(setup.backend)
+        if simulator is None:
             raise ConfigError(
                 "the simulated camera renders the simulated robot: use --backend sim, or "
                 "--camera none to walk blind"
             )
         if not isinstance(setup.mount, CameraMount):
             raise ConfigError("the simulated camera needs a CameraMount")
-        return cls(setup.bus, setup.backend, setup.mount, color=setup.color)
+        return cls(setup.bus, simulator, setup.mount, color=setup.color)
 
     def tick(self, t: float) -> bool:
         """Take and publish a frame if one is due at time ``t`` [s]; True when it did."""

@@ -185,6 +185,50 @@ class BridgeTraffic:
     bridge_received: dict[str, int]
 
 
+@dataclass(frozen=True)
+class ServoBusMetrics:
+    """What a walk's servo bus carried, by the emulated bus's byte clock (``--servo-bus``).
+
+    Attributes:
+        protocol: Dynamixel protocol, 1 or 2.
+        baud: Bits per second.
+        servos: Servos on the bus.
+        ticks: Control ticks that sent targets.
+        packets: Instruction and status packets, set-up included.
+        errors: Status packets with an error, and instructions that arrived corrupted.
+        bytes_per_tick: Bytes on the wire per control tick (writes and reads).
+        write_bytes_per_tick: Of the goal writes and their answers.
+        read_bytes_per_tick: Of the read instructions and their status packets.
+        write_ms_per_tick: Wire time of the writes per tick [ms].
+        read_ms_per_tick: Wire time of the reads per tick, return delays included [ms].
+        utilisation: Mean share of a control period the bus was busy.
+        utilisation_max: The busiest tick's share.
+        reads_per_tick: Servos read one by one each tick (the read schedule).
+        joint_targets_clamped: Joint targets moved inside their limits before sending.
+        joint_targets_over_speed: Joint targets faster than their servo model's no-load
+            speed (the real servo would lag them).
+        fault: Why the bus stopped the walk, or "".
+    """
+
+    protocol: int
+    baud: int
+    servos: int
+    ticks: int
+    packets: int
+    errors: int
+    bytes_per_tick: float
+    write_bytes_per_tick: float
+    read_bytes_per_tick: float
+    write_ms_per_tick: float
+    read_ms_per_tick: float
+    utilisation: float
+    utilisation_max: float
+    reads_per_tick: int
+    joint_targets_clamped: int
+    joint_targets_over_speed: int
+    fault: str
+
+
 @dataclass
 class WalkMetrics:
     """Everything a walk measured; :meth:`to_json` is ``metrics.json``.
@@ -201,6 +245,7 @@ class WalkMetrics:
         commands: Command-step timing, else None.
         navigated: Whether routes were planned (None: not said).
         bridge: The network bridge's traffic (``footfall robot``), else None.
+        servo_bus: The servo bus's traffic (a Dynamixel bus), else None.
     """
 
     gait: GaitMetrics
@@ -214,6 +259,7 @@ class WalkMetrics:
     commands: CommandTiming | None = None
     navigated: bool | None = None
     bridge: BridgeTraffic | None = None
+    servo_bus: ServoBusMetrics | None = None
 
     @property
     def fell(self) -> bool:
@@ -241,6 +287,8 @@ class WalkMetrics:
             out["navigated"] = self.navigated
         if self.bridge is not None:
             out.update(asdict(self.bridge))
+        if self.servo_bus is not None:
+            out["servo_bus"] = asdict(self.servo_bus)
         return out
 
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from footfall.biped.planner import FOOT_LENGTH, FOOT_WIDTH
-from footfall.messages import Mode
+from footfall.messages import Mode, ServoStatus
 from footfall.nodes.navigation import NavigatorNode
 from footfall.station.inbox import RobotView
 from footfall.station.views import (
@@ -43,6 +43,7 @@ class PageView:
         gui = self.server.gui
         self.status_text = gui.add_markdown("**status:** -")
         self.pose_text = gui.add_markdown("**pose:** -")
+        self.servo_text = gui.add_markdown("**servos:** -")
         self.depth_image = gui.add_image(np.zeros((24, 32, 3), np.uint8), label="depth")
         self.color_image = gui.add_image(np.zeros((24, 32, 3), np.uint8), label="colour")
         self.score_image = gui.add_image(np.zeros((32, 32, 3), np.uint8), label="score map")
@@ -88,6 +89,8 @@ class PageView:
                 f"**pose:** x {p.x:.3f} m, y {p.y:.3f} m, yaw {math.degrees(p.yaw):.1f} deg, "
                 f"body z {s.body_z:.3f} m"
             )
+        if robot.servos is not None:
+            self.servo_text.content = servo_readout(robot.servos)
         if robot.log:
             self.log_text.content = "**log:**\n\n" + "\n\n".join(robot.log)
         if robot.depth is not None:
@@ -151,3 +154,16 @@ class PageView:
             feet = feet_segments(p.footsteps, FOOT_LENGTH, FOOT_WIDTH)
             scene.add_line_segments("/biped/footsteps", feet, (20, 170, 40))
             scene.add_line_segments("/biped/com", polyline_segments(p.com, 0.02), (0, 0, 0))
+
+
+def servo_readout(status: ServoStatus) -> str:
+    """The servos line: posture, the hottest servo, the lowest voltage, the fault."""
+    text = f"**servos:** {status.posture.value}"
+    if status.temperatures_c is not None and np.isfinite(status.temperatures_c).any():
+        hottest = int(np.nanargmax(status.temperatures_c))
+        text += f"; hottest {status.temperatures_c[hottest]:.0f} °C (joint {hottest})"
+    if status.voltages_v is not None and np.isfinite(status.voltages_v).any():
+        text += f"; supply {np.nanmin(status.voltages_v):.1f} V"
+    if status.fault:
+        text += f"; **{status.fault}**"
+    return text

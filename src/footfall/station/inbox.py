@@ -19,6 +19,7 @@ from footfall.messages import (
     MapUpdate,
     Obstacles,
     RobotState,
+    ServoStatus,
     Touchdown,
 )
 
@@ -40,6 +41,7 @@ class RobotView:
         map: Map update, or None.
         obstacles: The biped's obstacles, or None.
         plan: The biped's plan, or None.
+        servos: The servo node's posture and servo health, or None.
         footholds: Chosen footholds, newest last, shape (3,) each [m].
         log: Log lines, formatted for the page.
         last_heard: ``time.monotonic()`` of the last message that shows the link is up.
@@ -53,6 +55,7 @@ class RobotView:
     map: MapUpdate | None = None
     obstacles: Obstacles | None = None
     plan: BipedPlan | None = None
+    servos: ServoStatus | None = None
     footholds: deque[np.ndarray] = field(default_factory=lambda: deque(maxlen=FOOTHOLDS_KEPT))
     log: deque[str] = field(default_factory=lambda: deque(maxlen=LOG_LINES_KEPT))
     last_heard: float = -math.inf
@@ -70,6 +73,7 @@ class RobotView:
             (LogLine.TOPIC, self._on_log),
             (Obstacles.TOPIC, self._on_obstacles),
             (BipedPlan.TOPIC, self._on_plan),
+            (ServoStatus.TOPIC, self._on_servos),
         ):
             bus.subscribe(topic, handler)
 
@@ -107,6 +111,10 @@ class RobotView:
     def _on_plan(self, m: BipedPlan) -> None:
         self._heard()
         self.plan = m
+
+    def _on_servos(self, m: ServoStatus) -> None:
+        self._heard()
+        self.servos = m
 
     def _on_log(self, m: LogLine) -> None:
         self.log.append(f"`{m.stamp:8.2f}` {m.node} {m.level}: {m.text}")
