@@ -73,3 +73,14 @@ def test_zero_noise_is_the_truth():
     truth = Pose(np.array([1.0, 2.0, 0.5]), Rotation.from_euler("z", 0.3))
     estimate = SlamNoise(zero, np.random.default_rng(0)).estimate(truth, 1.0)
     np.testing.assert_allclose(estimate.matrix, truth.matrix, atol=1e-15)
+
+
+def test_poses_decoded_from_bytes_compose() -> None:
+    """A pose that came over the network (read-only arrays) maps points and composes."""
+    from footfall.messages import PoseEstimate
+
+    pose = Pose(np.array([1.0, 2.0, 3.0]), Rotation.from_euler("z", 0.3))
+    estimate = PoseEstimate.decode(PoseEstimate(1.0, pose, pose).encode())
+    assert not estimate.body_in_world.position.flags.writeable
+    composed = estimate.body_in_world.compose(estimate.camera_in_world)
+    np.testing.assert_allclose(composed.position, pose.compose(pose).position)

@@ -186,3 +186,36 @@ def test_hardware_table_errors_say_what_is_wrong(table: dict, message: str) -> N
     """A malformed [hardware] table is refused with the entry named."""
     with pytest.raises(ConfigError, match=message):
         hardware_from_dict(SPEC, table, protocol=1)
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"fault": "melt:5@2"}, "KIND one of silent, overheat, checksum, port"),
+        ({"fault": "overheat:99@2"}, "no such servo"),
+        ({"protocol": "3"}, "protocol '3' is not 1 or 2"),
+        ({"baud": "57600"}, "no option baud"),
+    ],
+)
+def test_servo_bus_options_are_checked(options: dict, message: str) -> None:
+    """The emulated bus's options are refused with what is wrong, before anything opens."""
+    from footfall.backends import BackendSetup
+    from footfall.hardware.servo_bus import ServoBusHexapod
+
+    with pytest.raises(ConfigError, match=message):
+        ServoBusHexapod.open(BackendSetup(SPEC, SPEC.body_height, options=options))
+
+
+def test_the_dynamixel_backend_needs_a_port() -> None:
+    """Without a port in the table or the options, the backend says where to set one."""
+    from footfall.backends import BackendSetup
+
+    with pytest.raises(ConfigError, match="no port"):
+        DynamixelHexapod.open(BackendSetup(SPEC, SPEC.body_height, options={"protocol": "1"}))
+
+
+def test_a_servo_fault_needs_the_servo_bus(tmp_path) -> None:
+    """--servo-fault without --servo-bus is refused."""
+    from footfall.cli import main
+
+    assert main(["walk", "--servo-fault", "silent:1@1", "--out", str(tmp_path)]) == 2

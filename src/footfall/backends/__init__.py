@@ -2,8 +2,9 @@
 
 A backend reads the robot's state (joint encoders, IMU attitude) and takes joint targets.
 The MuJoCo simulation (:mod:`footfall.sim.hexapod`) is one implementation, the mock of
-:mod:`footfall.backends.mock` another; a driver for a real robot's servo bus implements
-the same four methods and a constructor, :meth:`HexapodBackend.open`, and joins
+:mod:`footfall.backends.mock` another, Dynamixel servos (:mod:`footfall.hardware.dynamixel`)
+a third; a driver for another robot's servo bus implements the same four methods and a
+constructor, :meth:`HexapodBackend.open`, and joins
 :data:`footfall.backends.registry.BACKENDS` with one line (``docs/extending.md``).
 
 The contract every backend keeps:
@@ -19,8 +20,13 @@ The contract every backend keeps:
   hardware waits for them, or returns at once when its own clock runs (``realtime`` True).
   ``RobotState.time`` is the backend's clock [s].
 - **Torque.** A backend starts with the torque on; the servo node switches it off at once
-  (the robot starts limp) and on when the mode is walking. With the torque off, targets
-  are dropped, not queued.
+  (the robot starts limp) and on when the mode is walking, then stands the robot up from
+  where its joints are; before switching it off again it sits the robot down. Torque on
+  must not move a joint (a servo's goal is set to where it is first). With the torque
+  off, targets are dropped, not queued.
+- **Optional.** ``close()`` releases a port or device at the end of a run;
+  ``health()`` returns the servos' temperatures [deg C], voltages [V] and loads
+  (fractions of stall torque), shape (18,) each, for the servo status.
 - **Faults.** When the robot cannot go on (a servo that stops answering, overheats or is
   overloaded), ``command`` raises :class:`~footfall.errors.BackendError` naming the servo
   and the cause. The servo node then logs it and sends no more targets: the servos hold

@@ -18,13 +18,26 @@ from footfall.cli import (
     plan,
     replay,
     robot,
+    servo_bus,
     station,
     walk,
     walk_biped,
 )
 from footfall.errors import FootfallError
 
-SUBCOMMANDS = (walk, map, replay, convert, bench, plan, obstacles, robot, station, walk_biped)
+SUBCOMMANDS = (
+    walk,
+    map,
+    replay,
+    convert,
+    bench,
+    plan,
+    obstacles,
+    robot,
+    servo_bus,
+    station,
+    walk_biped,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

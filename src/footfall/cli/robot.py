@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from rich.console import Console
@@ -96,12 +97,24 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--camera",
         choices=(*CAMERAS.names(), "none"),
-        default="sim",
-        help="the depth camera; none walks blind (no map, nominal footholds)",
+        help="the depth camera; none walks blind (no map, nominal footholds) [default: sim; "
+        "network with --hardware]",
     )
     p.add_argument(
-        "--pose", choices=POSES.names(), default="sim", help="the pose source placing the images"
+        "--pose",
+        choices=POSES.names(),
+        help="the pose source placing the images [default: sim; network with --hardware]",
     )
+    hardware = p.add_argument_group("a real robot's servos")
+    hardware.add_argument(
+        "--hardware",
+        type=Path,
+        metavar="ROBOT",
+        help="run on the robot's Dynamixel servos (the dynamixel backend; ROBOT a built-in name or "
+        "a TOML file with its [hardware] table), with the camera and pose from the network "
+        "(footfall servo-bus in a dry run, or your camera's process)",
+    )
+    hardware.add_argument("--port", help="the servo bus's serial port (overrides [hardware] port)")
     for kind, example in (("camera", "a device's serial number"), ("pose", "a map file")):
         p.add_argument(
             f"--{kind}-option",
@@ -192,34 +205,48 @@ def run(args: argparse.Namespace, console: Console) -> int:
         return 0
     if args.case is not None or args.map is not None or args.cloud is not None:
         raise ConfigError("--case, --map and --cloud go with --biped")
+    backend, backend_options = args.backend, _options("--backend-option", args.backend_option)
+    camera, pose, robot, terrain = args.camera or "sim", args.pose or "sim", "default", args.sim
+    if args.hardware is not None:
+        backend, robot, terrain = "dynamixel", str(args.hardware), "flat"
+        camera, pose = args.camera or "network", args.pose or "network"
+        backend_options = {"robot": robot, **backend_options}
+        if args.port is not None:
+            backend_options["port"] = args.port
+    elif args.port is not None:
+        raise ConfigError("--port goes with --hardware")
     request = RobotRequest(
         walk=WalkRequest(
-            terrain=args.sim,
+            terrain=terrain,
             seed=args.seed,
             seconds=args.seconds,
+            robot=robot,
             record=args.record,
             rerun=args.rerun,
             rerun_spawn=args.rerun_spawn,
-            backend=args.backend,
-            backend_options=_options("--backend-option", args.backend_option),
+            backend=backend,
+            backend_options=backend_options,
             camera_options=_options("--camera-option", args.camera_option),
             pose_options=_options("--pose-option", args.pose_option),
-            camera=None if args.camera == "none" else args.camera,
-            pose=args.pose,
+            camera=None if camera == "none" else camera,
+            pose=pose,
         ),
         network=network_config(args),
         seconds=args.seconds,
         stop_at_goal=args.stop_at_goal,
         rates=_rates(args.rate),
     )
-    where = f"{args.backend} hexapod on {args.sim}; torque off until mode=walking"
+    world = f"servos of {args.hardware}" if args.hardware else f"on {args.sim}"
+    where = f"{backend} hexapod {world}; torque off until mode=walking"
     ready = _ready(console, args, where)
     report = run_robot_report(request, on_ready=ready)
     metrics = report.to_json()
     # A robot that does not know where its feet are is not judged by the terrain's truth.
     invalid = metrics.get("invalid_footholds", "not judged")
+    distance = metrics["distance_m"]
+    travelled = f"{distance:.2f} m" if math.isfinite(distance) else "not measured"
     console.print(
-        f"ran {metrics['sim_seconds']:.1f} s: distance {metrics['distance_m']:.2f} m, "
+        f"ran {metrics['sim_seconds']:.1f} s: distance {travelled}, "
         f"reached goal {metrics['reached_goal']}, fell {metrics['fell']}, "
         f"invalid footholds {invalid}"
     )

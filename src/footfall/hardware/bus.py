@@ -15,7 +15,7 @@ import termios
 import numpy as np
 import numpy.typing as npt
 
-from footfall.errors import BackendError
+from footfall.errors import BackendError, ConfigError
 from footfall.hardware.config import HardwareConfig, JointServo
 from footfall.hardware.protocol import (
     HARDWARE_ERROR_TEXTS,
@@ -54,7 +54,12 @@ class DynamixelBus:
     """
 
     def __init__(self, config: HardwareConfig, control_period: float = 0.01) -> None:
-        import dynamixel_sdk as sdk
+        try:
+            import dynamixel_sdk as sdk
+        except ImportError as exc:
+            raise ConfigError(
+                "the Dynamixel bus needs ROBOTIS' dynamixel-sdk: install footfall[hardware]"
+            ) from exc
 
         self._sdk = sdk
         self.config = config

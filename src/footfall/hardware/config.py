@@ -31,7 +31,8 @@ import numpy.typing as npt
 
 from footfall.errors import ConfigError
 from footfall.hardware.models import DEFAULT_MODELS, ServoModel, servo_model
-from footfall.robot.spec import HexapodSpec
+from footfall.robot.spec import BUILTIN_ROBOTS, HexapodSpec
+from footfall.robots import read_description
 
 JOINTS = ("coxa", "femur", "tibia")
 # The baud rates the Dynamixel SDK's port handler accepts.
@@ -210,6 +211,26 @@ def hardware_from_dict(
         if isinstance(exc, ConfigError):
             raise
         raise ConfigError(f"[hardware] has a malformed entry: {exc}") from exc
+
+
+def hardware_from_options(spec: HexapodSpec, options: dict[str, str]) -> HardwareConfig:
+    """The servo bus a backend's options describe, taking out the keys it reads.
+
+    ``robot`` (a built-in name or a TOML file whose ``[hardware]`` table to use),
+    ``protocol`` (1 or 2, when the table names none), ``port`` (overrides the table's).
+
+    Raises:
+        ConfigError: On a malformed table or protocol.
+    """
+    table = None
+    if "robot" in options:
+        table = read_description(options.pop("robot"), BUILTIN_ROBOTS).get("hardware")
+    protocol = options.pop("protocol", "")
+    if protocol not in ("", "1", "2"):
+        raise ConfigError(f"Dynamixel protocol {protocol!r} is not 1 or 2")
+    return hardware_from_dict(
+        spec, table, protocol=int(protocol) if protocol else None, port=options.pop("port", None)
+    )
 
 
 def _check_reach(servo: JointServo) -> None:

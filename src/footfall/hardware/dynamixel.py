@@ -22,10 +22,8 @@ from scipy.spatial.transform import Rotation
 from footfall.backends import BackendSetup
 from footfall.errors import BackendError, ConfigError
 from footfall.hardware.bus import DynamixelBus
-from footfall.hardware.config import HardwareConfig, hardware_from_dict
+from footfall.hardware.config import HardwareConfig, hardware_from_options
 from footfall.messages import JointTargets, RobotState
-from footfall.robot.spec import BUILTIN_ROBOTS
-from footfall.robots import read_description
 
 # Targets of a joint standing still still get this speed, so a servo never crawls [rad/s].
 MIN_SPEED = 0.05
@@ -89,16 +87,7 @@ class DynamixelHexapod:
             BackendError: When the port does not open or a servo does not answer.
         """
         options = dict(setup.options)
-        table = None
-        if "robot" in options:
-            table = read_description(options.pop("robot"), BUILTIN_ROBOTS).get("hardware")
-        protocol = options.pop("protocol", None)
-        config = hardware_from_dict(
-            setup.spec,
-            table,
-            protocol=int(protocol) if protocol else None,
-            port=options.pop("port", None),
-        )
+        config = hardware_from_options(setup.spec, options)
         period = float(options.pop("control_period", 0.01))
         if options:
             raise ConfigError(

@@ -16,18 +16,17 @@ packets arrive corrupted), ``port`` (the adapter hangs up; ID ignored).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
 from footfall.backends import BackendSetup
 from footfall.errors import ConfigError
-from footfall.hardware.config import HardwareConfig, hardware_from_dict
+from footfall.hardware.config import HardwareConfig, hardware_from_options
 from footfall.hardware.dynamixel import DynamixelHexapod
 from footfall.hardware.emulated_servos import EmulatedServos
 from footfall.hardware.emulator import EmulatedBus, WireCounts
 from footfall.messages import JointTargets, RobotState
-from footfall.robot.spec import BUILTIN_ROBOTS
-from footfall.robots import read_description
 from footfall.sim.hexapod import MujocoHexapod
 from footfall.sim.walk_metrics import ServoBusMetrics
 
@@ -65,6 +64,26 @@ class BusFault:
             return cls(kind, int(servo or 0), float(when))
         except ValueError as exc:
             raise ConfigError(f"servo bus fault {text!r}: {exc}") from exc
+
+
+def step_with_servos(
+    simulator: MujocoHexapod,
+    servos: EmulatedServos,
+    duration: float,
+    before_step: Callable[[float], None] | None = None,
+) -> None:
+    """Step the physics for ``duration`` [s], the emulated servos driving each step.
+
+    ``before_step`` is called with the simulated time before each physics step.
+    """
+    dt = simulator.timestep
+    for _ in range(max(1, round(duration / dt))):
+        if before_step is not None:
+            before_step(float(simulator.data.time))
+        setpoints, rates = servos.drive(dt)
+        simulator.drive(setpoints, rates, servos.torque)
+        simulator.advance(dt)
+        servos.sense(*simulator.joints())
 
 
 class ServoBusHexapod:
@@ -119,13 +138,7 @@ class ServoBusHexapod:
         [s].
         """
         options = dict(setup.options)
-        table = None
-        if "robot" in options:
-            table = read_description(options.pop("robot"), BUILTIN_ROBOTS).get("hardware")
-        protocol = options.pop("protocol", None)
-        config = hardware_from_dict(
-            setup.spec, table, protocol=int(protocol) if protocol else None, port=""
-        )
+        config = hardware_from_options(setup.spec, options)  # its port: the emulator's
         faults = tuple(BusFault.parse(f) for f in options.pop("fault", "").split(",") if f)
         period = float(options.pop("control_period", 0.01))
         if options:
@@ -173,14 +186,7 @@ class ServoBusHexapod:
 
     def advance(self, duration: float) -> None:
         """Step the physics, the emulated servos driving the joints at each step."""
-        sim = self.simulator
-        dt = sim.timestep
-        for _ in range(max(1, round(duration / dt))):
-            self._inject(float(sim.data.time))
-            setpoints, rates = self.servos.drive(dt)
-            sim.drive(setpoints, rates, self.servos.torque)
-            sim.advance(dt)
-            self.servos.sense(*sim.joints())
+        step_with_servos(self.simulator, self.servos, duration, self._inject)
 
     def _inject(self, now: float) -> None:
         while self.faults and self.faults[0].time <= now:

@@ -105,3 +105,5 @@ POSES: Registry[PoseFactory] = Registry("pose source")
 
 CAMERAS.register("sim", "footfall.sim.sensors:SimCameraNode")
 POSES.register("sim", "footfall.sim.sensors:SimPoseNode")
+CAMERAS.register("network", "footfall.nodes.network_sources:NetworkCamera")
+POSES.register("network", "footfall.nodes.network_sources:NetworkPose")

@@ -86,7 +86,11 @@ class Pose:
 
     def apply(self, points: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Map points, shape (n, 3), from this frame into the world."""
-        return self.rotation.apply(np.asarray(points, dtype=np.float64)) + self.position
+        vectors = np.asarray(points, dtype=np.float64)
+        if not vectors.flags.writeable:
+            # SciPy's Rotation.apply refuses read-only buffers (a decoded message's arrays).
+            vectors = vectors.copy()
+        return self.rotation.apply(vectors) + self.position
 
     def compose(self, other: Pose) -> Pose:
         """``self * other``: the pose of a frame given relative to this one."""

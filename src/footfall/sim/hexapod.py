@@ -112,7 +112,9 @@ class MujocoHexapod:
         self.data.ctrl[:] = ctrl.ravel()
 
     def set_torque(self, enabled: bool) -> None:
-        """Servos on (position control) or off: zero actuator force, the legs go limp."""
+        """Servos on (position control) where the joints are, or off: the legs go limp."""
+        if enabled and not self.torque:
+            self.data.ctrl[:] = self.data.qpos[self._qpos_index]  # nothing jumps
         self.torque = bool(enabled)
         on = 1.0 if self.torque else 0.0
         self.model.actuator_gainprm[:, 0] = on * self._servo_gains

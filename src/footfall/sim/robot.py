@@ -11,10 +11,12 @@ and its record is judged against the terrain's truth like a simulated walk.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from footfall.messages import Mode, ModeCommand, Posture
 from footfall.nodes.movement import COMMAND_TIMEOUT_S
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bridge import Bridge
@@ -41,6 +43,8 @@ OUTGOING: dict[str, float | None] = {
     "servo": None,
 }
 INCOMING = ("command", "mode")
+# Asked to stop, the robot sits down for at most this long before the run ends [s].
+SIT_DOWN_SECONDS = 5.0
 
 
 @dataclass(frozen=True)
@@ -102,12 +106,25 @@ def run_robot(
     scheduler = WallClockScheduler(walk.control_rate_hz)
     dt = scheduler.period
 
+    asked_to_stop: list[float] = []
+
     def tick(t: float) -> bool:
+        if asked_to_stop:
+            # Sitting down: nothing more comes in from the network.
+            robot.step(t, dt)
+            servo = robot.graph.servo
+            seated = servo.posture in (Posture.LIMP, Posture.HALTED)
+            return seated or t - asked_to_stop[0] > SIT_DOWN_SECONDS
         bridge.spin()
         robot.step(t, dt)
         if on_tick is not None:
             on_tick(t + dt)
-        return judge.should_stop(t + dt) or (should_stop is not None and should_stop())
+        if should_stop is not None and should_stop():
+            # Ctrl-C: the robot sits down before the run ends, whatever the station sends.
+            asked_to_stop.append(t)
+            local.publish(ModeCommand.TOPIC, ModeCommand(Mode.TORQUE_OFF, math.inf))
+            return robot.graph.servo.posture in (Posture.LIMP, Posture.HALTED)
+        return judge.should_stop(t + dt)
 
     wall_start = time.perf_counter()
     try:

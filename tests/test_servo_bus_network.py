@@ -1,0 +1,86 @@
+"""A dry run in two processes: `footfall servo-bus` and `footfall robot --hardware`, driven
+over zenoh as a station drives a robot."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+from footfall.messages import (
+    GaitState,
+    GaitStatus,
+    Mode,
+    ModeCommand,
+    Posture,
+    ServoStatus,
+    WalkCommand,
+)
+from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
+from test_robot_network import wait_for
+from test_zenoh_bus import free_port
+
+
+def footfall(*args: str) -> subprocess.Popen:
+    """A footfall command in its own process."""
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    return subprocess.Popen(
+        [sys.executable, "-m", "footfall.cli", *args],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+    )
+
+
+def test_the_robot_process_walks_on_the_emulated_bus_and_stops_on_the_watchdog(tmp_path):
+    """The robot's process opens the emulated servos at the link, stands up when walking
+    starts, steps while commands come, stands on the watchdog when they stop, and sits down
+    before it exits on Ctrl-C."""
+    link = tmp_path / "ttyDXL"
+    sensors = f"tcp/127.0.0.1:{free_port()}"
+    robot_endpoint = f"tcp/127.0.0.1:{free_port()}"
+    server = footfall(
+        "servo-bus", "--sim", "flat", "--link", str(link), "--listen", sensors, "--seconds", "90"
+    )
+    robot = None
+    try:
+        end = time.monotonic() + 30
+        while not link.is_symlink() and time.monotonic() < end:
+            time.sleep(0.1)
+        assert link.is_symlink(), server.communicate(timeout=5)[0].decode()
+        robot = footfall(
+            "robot", "--hardware", "default", "--port", str(link),
+            "--camera-option", f"connect={sensors}", "--listen", robot_endpoint,
+            "--seconds", "80", "--out", str(tmp_path / "out"),
+        )  # fmt: skip
+        status: list[GaitStatus] = []
+        postures: list[Posture] = []
+        with ZenohBus(ZenohConfig(connect=(robot_endpoint,))) as station:
+            station.subscribe(GaitStatus.TOPIC, status.append)
+            station.subscribe(ServoStatus.TOPIC, lambda m: postures.append(m.posture))
+            assert wait_for(station, lambda: bool(status), 40), robot.communicate(timeout=5)[0]
+
+            def walking() -> bool:
+                now = time.monotonic()
+                station.publish(ModeCommand.TOPIC, ModeCommand(Mode.WALKING, now))
+                station.publish(WalkCommand.TOPIC, WalkCommand(speed=0.05, stamp=now))
+                return status[-1].steps_taken >= 6
+
+            assert wait_for(station, walking, 40)
+            assert Posture.RISING in postures and postures[-1] is Posture.STANDING
+            assert status[-1].mode is Mode.WALKING and not status[-1].frozen_reason
+            wait_for(station, lambda: False, 1.5)  # no more commands: the watchdog
+            assert "no command" in status[-1].frozen_reason
+            assert status[-1].state is GaitState.REST
+            robot.send_signal(signal.SIGINT)
+            output = robot.communicate(timeout=20)[0].decode()
+            station.spin(0.5)
+        assert robot.returncode == 0, output
+        assert postures[-2:] == [Posture.SITTING, Posture.LIMP], output
+    finally:
+        for process in (robot, server):
+            if process is not None and process.poll() is None:
+                process.send_signal(signal.SIGINT)
+                process.communicate(timeout=20)
