@@ -67,7 +67,6 @@ class DynamixelHexapod:
         self.torque = any(self.bus.torque_enabled())
         self._last_goal = self.bus.positions.copy()
         self.clamped = 0
-        self.ticks = 0
 
     @property
     def fault(self) -> str:
@@ -138,7 +137,6 @@ class DynamixelHexapod:
         )
         self.bus.send(clamped, np.maximum(rates, MIN_SPEED))
         self._last_goal = clamped
-        self.ticks += 1
         self.bus.poll()
 
     def set_torque(self, enabled: bool) -> None:

@@ -53,6 +53,12 @@ class EmulatedServo:
         self.model = joint.model
         self.index = index
         self.table = bytearray(self.model.table_size)
+        self._writable = {
+            a
+            for r in self.model.registers.values()
+            if r.writable
+            for a in range(r.address, r.address + r.size)
+        }
         self.answering = True  # False: a servo that stopped answering
         self.corrupt = False  # True: its status packets fail their checksum
         self.hardware_error = 0  # Protocol 2.0 hardware error bits
@@ -103,11 +109,7 @@ class EmulatedServo:
 
     def writable(self, address: int, size: int) -> bool:
         """Whether every byte from ``address`` on lies in a writable register."""
-        covered = set()
-        for r in self.model.registers.values():
-            if r.writable:
-                covered.update(range(r.address, r.address + r.size))
-        return all(a in covered for a in range(address, address + size))
+        return all(a in self._writable for a in range(address, address + size))
 
 
 class EmulatedServos:
