@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from footfall.errors import BackendError, ConfigError
 from footfall.hardware.bus import MISSES_ALLOWED
@@ -219,3 +222,32 @@ def test_a_servo_fault_needs_the_servo_bus(tmp_path) -> None:
     from footfall.cli import main
 
     assert main(["walk", "--servo-fault", "silent:1@1", "--out", str(tmp_path)]) == 2
+
+
+@pytest.mark.parametrize("protocol", [1, 2])
+@settings(max_examples=20, deadline=None)
+@given(noise=st.binary(min_size=1, max_size=300))
+def test_the_emulated_bus_survives_noise_on_the_line(protocol: int, noise: bytes) -> None:
+    """Any bytes on the line, malformed packets and false headers included, leave the
+    servos answering the next instruction once the line has been quiet."""
+    import dynamixel_sdk as sdk
+
+    b = Bench(protocol)
+    try:
+        line = os.open(b.bus.path, os.O_RDWR | os.O_NOCTTY)
+        try:
+            os.write(line, noise)
+            time.sleep(0.08)  # the line goes quiet: a half packet is dropped
+        finally:
+            os.close(line)
+        port = sdk.PortHandler(b.bus.path)
+        assert port.openPort()
+        try:
+            packets = sdk.PacketHandler(float(protocol))
+            number, result, _ = packets.ping(port, 1)
+            assert result == sdk.COMM_SUCCESS
+            assert number == b.config.servos[0].model.model_number
+        finally:
+            port.closePort()
+    finally:
+        b.close()

@@ -181,10 +181,13 @@ class EmulatedServos:
             self.torque[s.index] = False
 
     def read(self, servo: EmulatedServo, address: int, size: int) -> bytes:
-        """The bytes of its table from ``address`` (present values refreshed)."""
+        """The bytes of its table from ``address`` (present values refreshed).
+
+        Registers footfall does not emulate read as zeros.
+        """
         with self.lock:
             self._refresh(servo)
-            return bytes(servo.table[address : address + size])
+            return bytes(servo.table[address : address + size]).ljust(size, b"\0")
 
     def write(self, servo: EmulatedServo, address: int, data: bytes) -> int:
         """Write bytes into its table; the error of the status packet (0 when accepted)."""

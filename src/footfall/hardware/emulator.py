@@ -26,6 +26,8 @@ from footfall.hardware.protocol import (
     BROADCAST_ID,
     P1_CHECKSUM,
     P1_INSTRUCTION,
+    P1_RANGE,
+    P2_ACCESS,
     P2_CRC,
     P2_INSTRUCTION,
     PING,
@@ -40,6 +42,10 @@ from footfall.hardware.protocol import (
 )
 
 _WRITES = (WRITE, SYNC_WRITE, REG_WRITE, ACTION)
+# Where the servos' control tables end (AX-12A's at 50, X series' at 661).
+TABLE_END = {1: 50, 2: 662}
+# A packet whose bytes stop coming for this long is dropped, as a servo's receiver does [s].
+QUIET_LINE_S = 0.02
 
 
 @dataclass
@@ -134,15 +140,23 @@ class EmulatedBus:
     def _serve(self) -> None:
         while not self._stop.is_set():
             try:
-                ready, _, _ = select.select([self._master], [], [], 0.05)
-                if not ready:
-                    continue
-                data = os.read(self._master, 4096)
+                ready, _, _ = select.select([self._master], [], [], QUIET_LINE_S)
+                data = os.read(self._master, 4096) if ready else b""
             except OSError:
                 return  # hung up
             arrived = time.perf_counter()
-            for instruction in self._reader.feed(data):
-                self._answer(instruction, arrived)
+            if data:
+                instructions = self._reader.feed(data)
+            elif self._reader.pending:
+                # The line went quiet in the middle of a packet: it was noise, not a packet.
+                instructions = self._reader.resync()
+            else:
+                continue
+            for instruction in instructions:
+                try:
+                    self._answer(instruction, arrived)
+                except (IndexError, ValueError):  # parameters too short for the instruction
+                    self.counts.errors += 1
 
     def _answer(self, instruction: Instruction, arrived: float) -> None:
         byte_time = self.config.byte_time
@@ -200,10 +214,14 @@ class EmulatedBus:
             if len(params) < (2 if p1 else 4):
                 return [self._status(servo, P1_INSTRUCTION if p1 else P2_INSTRUCTION)]
             address, size = (params[0], params[1]) if p1 else _words(params, 2)
+            if address + size > TABLE_END[self.protocol]:
+                return [self._status(servo, P1_RANGE if p1 else P2_ACCESS)]
             if servo.status_level < 1:
                 return []
             return [self._status(servo, 0, self.servos.read(servo, address, size))]
         if inst.code == WRITE:
+            if len(params) < (1 if p1 else 2):
+                return [self._status(servo, P1_INSTRUCTION if p1 else P2_INSTRUCTION)]
             address, data = (params[0], params[1:]) if p1 else (_words(params, 1)[0], params[2:])
             error = self.servos.write(servo, address, bytes(data))
             return [self._status(servo, error)] if servo.status_level >= 2 else []
@@ -221,6 +239,9 @@ class EmulatedBus:
 
     def _sync_read(self, params: bytes) -> list[tuple[EmulatedServo, bytes]]:
         address, size = _words(params, 2)
+        if len(params) < 4 or address + size > TABLE_END[2]:
+            self.counts.errors += 1
+            return []
         statuses = []
         for servo_id in params[4:]:
             servo = self.servos.by_id.get(servo_id)

@@ -142,6 +142,21 @@ class PacketReader:
         self._buffer = bytearray()
         self.dropped = 0  # bytes thrown away before a header
 
+    @property
+    def pending(self) -> int:
+        """Bytes held for a packet not yet complete."""
+        return len(self._buffer)
+
+    def resync(self) -> list[Instruction]:
+        """Give up on the packet being received: drop its first byte and look again.
+
+        For a line gone quiet mid-packet, as after noise that looked like a header.
+        """
+        if self._buffer:
+            self.dropped += 1
+            del self._buffer[0]
+        return self.feed(b"")
+
     def feed(self, data: bytes) -> list[Instruction]:
         """Add received bytes; the packets now complete."""
         self._buffer += data
