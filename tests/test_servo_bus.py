@@ -6,6 +6,7 @@ import dataclasses
 import math
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -251,3 +252,21 @@ def test_the_emulated_bus_survives_noise_on_the_line(protocol: int, noise: bytes
             port.closePort()
     finally:
         b.close()
+
+
+def test_the_link_never_replaces_a_file(tmp_path) -> None:
+    """--link naming an existing file is refused; an old link is replaced."""
+    config = hardware_from_dict(SPEC, None, protocol=1)
+    taken = tmp_path / "ttyDXL"
+    taken.write_text("not a port")
+    with pytest.raises(ConfigError, match="is not a link"):
+        EmulatedBus(EmulatedServos(config), link=taken)
+    assert taken.read_text() == "not a port"
+    stale = tmp_path / "old"
+    stale.symlink_to(tmp_path / "gone")
+    bus = EmulatedBus(EmulatedServos(config), link=stale)
+    try:
+        assert stale.resolve() == Path(bus.path).resolve()
+    finally:
+        bus.close()
+    assert not stale.is_symlink()

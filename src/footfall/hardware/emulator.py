@@ -20,6 +20,7 @@ import tty
 from dataclasses import dataclass
 from pathlib import Path
 
+from footfall.errors import ConfigError
 from footfall.hardware.emulated_servos import EmulatedServo, EmulatedServos
 from footfall.hardware.protocol import (
     ACTION,
@@ -100,6 +101,10 @@ class EmulatedBus:
         self.link = link
         if link is not None:
             link = Path(link)
+            if link.exists() and not link.is_symlink():
+                os.close(self._master)
+                os.close(self._slave)
+                raise ConfigError(f"{link} exists and is not a link: choose another --link")
             if link.is_symlink():
                 link.unlink()
             link.symlink_to(self.path)
