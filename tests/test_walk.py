@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -149,3 +151,16 @@ def test_skipped_ticks_keep_the_physics_on_the_controller_clock(default_spec):
     robot.step(0.05, 0.01)  # ticks 0.01 to 0.04 were skipped
     assert robot.backend.data.time - start == pytest.approx(0.06, abs=1e-9)
     robot.close()
+
+
+def test_a_default_walk_has_the_time_to_reach_its_goal():
+    """With no --seconds, a walk gets twice the straight line's time to the goal at its
+    speed (at least 60 s): the slow wave gait as much as it needs."""
+    from footfall.reports.walk import WalkRequest, prepare_walk
+
+    for gait in ("tripod", "wave"):
+        for terrain in ("stairs", "cobblestones", "course"):
+            job = prepare_walk(WalkRequest(terrain=terrain, gait=gait))
+            distance = math.dist(job.terrain.start, job.terrain.goal)
+            assert job.settings.seconds >= max(60.0, 2.0 * distance / job.speed) - 1e-9
+    assert prepare_walk(WalkRequest(seconds=5.0)).settings.seconds == 5.0

@@ -63,8 +63,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--seconds",
         type=float,
-        default=60.0,
-        help="longest walking time in seconds; the walk ends at the goal",
+        help="longest walking time in seconds; the walk ends at the goal [default: twice the "
+        "straight line's time to the goal at the commanded speed, at least 60 s]",
     )
     p.add_argument(
         "--speed",
@@ -234,10 +234,10 @@ def run(args: argparse.Namespace, console: Console) -> int:
         mode = "with camera, map, foothold planning and route planning"
     console.print(
         f"Walking robot [bold]{job.spec.name}[/] across [bold]{args.terrain}[/] terrain, {mode}: "
-        f"{args.gait} gait at {job.speed:.3f} m/s, at most {args.seconds:g} s"
+        f"{args.gait} gait at {job.speed:.3f} m/s, at most {job.settings.seconds:g} s"
     )
     with sim_progress(console) as progress:
-        task = progress.add_task("walk", total=args.seconds)
+        task = progress.add_task("walk", total=job.settings.seconds)
         report = run_walk(job, on_tick=lambda t: progress.update(task, completed=t))
     paths = report.write(args.out)
     metrics = report.to_json()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,6 +22,10 @@ from footfall.sim.walk_settings import WalkResult, WalkSettings
 
 # The walk's default speed [m/s], lowered to 3/4 of the gait's top speed where that is less.
 DEFAULT_SPEED_MPS = 0.10
+# A walk with no --seconds gets this many times the straight line's time, and at least
+# MIN_DEFAULT_SECONDS [s].
+DEFAULT_TIME_MARGIN = 2.0
+MIN_DEFAULT_SECONDS = 60.0
 # Terrain parameters a walk may set by their own option (``--rise``, ``--groove``).
 TERRAIN_OPTIONS = ("rise", "groove")
 
@@ -31,7 +36,7 @@ class WalkRequest:
 
     Attributes:
         terrain: Terrain name.
-        seconds: Longest walking time [s].
+        seconds: Longest walking time [s]; None for :func:`default_seconds`.
         speed: Body speed [m/s]; None for the default.
         gait: Gait name.
         robot: Built-in robot name or a robot TOML file.
@@ -63,7 +68,7 @@ class WalkRequest:
     """
 
     terrain: str = "stairs"
-    seconds: float = 60.0
+    seconds: float | None = None
     speed: float | None = None
     gait: str = "tripod"
     robot: str = "default"
@@ -116,6 +121,20 @@ class WalkJob:
         return self.settings.command.speed
 
 
+def default_seconds(
+    terrain: Terrain, speed: float, goal: tuple[float, float] | None = None
+) -> float:
+    """A walk's longest time when none is asked for [s].
+
+    Twice what the straight line from the start to the goal takes at ``speed`` (room for
+    routes round obstacles, slowed steps and freezes that clear), and never less than
+    ``MIN_DEFAULT_SECONDS``: a slow gait gets the time to reach its goal.
+    """
+    goal = terrain.goal if goal is None else goal
+    distance = math.dist(terrain.start, goal)
+    return max(MIN_DEFAULT_SECONDS, DEFAULT_TIME_MARGIN * distance / speed)
+
+
 def prepare_walk(request: WalkRequest) -> WalkJob:
     """Resolve a request: the robot, the speed, the terrain and its parameters.
 
@@ -154,11 +173,14 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
     if request.straight and request.blind:
         raise ConfigError("--straight is for planned walking; a blind walk always goes straight")
     terrain = make_terrain(request.terrain, request.seed, **params)
+    seconds = request.seconds
+    if seconds is None:
+        seconds = default_seconds(terrain, speed, request.goal)
     height = spec.body_height if request.height is None else request.height
     width, image_height = request.image_size
     settings = WalkSettings(
         terrain=request.terrain,
-        seconds=request.seconds,
+        seconds=seconds,
         command=WalkCommand(speed=speed, body_height=height),
         gait=gait,
         blind=request.blind or request.camera is None,
