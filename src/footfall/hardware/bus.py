@@ -82,6 +82,7 @@ class DynamixelBus:
         self.over_speed = 0
         self.fault = ""
         self._misses = np.zeros(n, dtype=int)
+        self._index = {s.servo_id: i for i, s in enumerate(self.servos)}
         self._next = 0
         self._start()
 
@@ -237,7 +238,7 @@ class DynamixelBus:
 
     def _check(self, servo: JointServo, result: int, error: int) -> bool:
         """True for a good status packet; raises on a servo that cannot go on."""
-        i = self.servos.index(servo)
+        i = self._index[servo.servo_id]
         if result != self._sdk.COMM_SUCCESS:
             self._misses[i] += 1
             if self._misses[i] >= MISSES_ALLOWED:

@@ -59,7 +59,7 @@ class NetworkCamera:
         self.poses: OrderedDict[float, PoseEstimate] = OrderedDict()
         self._frame: DepthFrame | None = None
         self._image: ColorImage | None = None
-        self._sent_stamps: dict[float, float] = {}  # robot stamp -> sender's stamp
+        self._handed: tuple[float, float] | None = None  # (robot's, sender's) stamp
         network.subscribe(DepthFrame.TOPIC, self._on_depth, last=True)
         network.subscribe(ColorImage.TOPIC, self._on_color, last=True)
         network.subscribe(PoseEstimate.TOPIC, self._on_pose)
@@ -91,7 +91,7 @@ class NetworkCamera:
         if frame is None:
             return False
         self.frames += 1
-        self._sent_stamps = {t: frame.stamp}
+        self._handed = (t, frame.stamp)
         self.bus.publish(DepthFrame.TOPIC, dataclasses.replace(frame, stamp=t))
         if self.color and self._image is not None:
             self.bus.publish(ColorImage.TOPIC, dataclasses.replace(self._image, stamp=t))
@@ -100,8 +100,9 @@ class NetworkCamera:
 
     def pose_for(self, stamp: float) -> PoseEstimate | None:
         """The sender's pose of the image handed over at ``stamp``, if it came."""
-        sent = self._sent_stamps.get(stamp)
-        return None if sent is None else self.poses.get(sent)
+        if self._handed is None or self._handed[0] != stamp:
+            return None
+        return self.poses.get(self._handed[1])
 
     def timing(self) -> dict[str, float]:
         """No timing of its own."""
