@@ -177,9 +177,12 @@ class DynamixelBus:
             raise BackendError(self.fault)
 
     def poll_all(self) -> None:
-        """Read every servo (as many ticks' reads as it takes)."""
-        for _ in range(math.ceil(len(self.servos) / self.schedule.reads) + 1):
-            self.poll()
+        """Read every servo once, a servo that missed its answer once more."""
+        if self.config.protocol == 2 and not self._sync_read_motion():
+            self._sync_read_motion()
+        for i in range(len(self.servos)):
+            if not self._read_state(i):
+                self._read_state(i)
 
     def poll(self) -> None:
         """This tick's reads: some servos' state block (Protocol 1.0) or all (2.0)."""
@@ -189,23 +192,34 @@ class DynamixelBus:
         if self.config.protocol == 2:
             self._sync_read_motion()
         for i in chosen:
-            servo = self.servos[i]
-            if servo.model.protocol == 1:
-                data, result, error = self._call(self.packets.readTxRx, servo.servo_id, 36, 8)
-                if self._check(servo, result, error):
-                    self._decode_p1(i, bytes(data))
-            else:
-                data, result, error = self._call(self.packets.readTxRx, servo.servo_id, 144, 3)
-                if self._check(servo, result, error):
-                    self.voltages[i] = int.from_bytes(bytes(data[0:2]), "little") / 10.0
-                    self.temperatures[i] = data[2]
+            self._read_state(i)
 
-    def _sync_read_motion(self) -> None:
+    def _read_state(self, i: int) -> bool:
+        """One servo's state block; False when it did not answer.
+
+        Protocol 1.0: position, speed, load, voltage, temperature; 2.0: voltage, temperature.
+        """
+        servo = self.servos[i]
+        if servo.model.protocol == 1:
+            data, result, error = self._call(self.packets.readTxRx, servo.servo_id, 36, 8)
+            if not self._check(servo, result, error):
+                return False
+            self._decode_p1(i, bytes(data))
+            return True
+        data, result, error = self._call(self.packets.readTxRx, servo.servo_id, 144, 3)
+        if not self._check(servo, result, error):
+            return False
+        self.voltages[i] = int.from_bytes(bytes(data[0:2]), "little") / 10.0
+        self.temperatures[i] = data[2]
+        return True
+
+    def _sync_read_motion(self) -> bool:
         """Every servo's load, speed and position (addresses 126-135) in one sync read.
 
         The SDK's sync read group drops the status packets' error bytes, so the packets are
         sent and received one by one with its packet handler: a servo's hardware alert
-        shows on the tick it happens.
+        shows on the tick it happens. False when a servo did not answer (those after it
+        are not heard then).
         """
         ids = [s.servo_id for s in self.servos]
         result = self._call(self.packets.syncReadTx, 126, 10, ids, len(ids), False)
@@ -215,7 +229,7 @@ class DynamixelBus:
         for i, servo in enumerate(self.servos):
             data, result, error = self._call(self.packets.readRx, servo.servo_id, 10)
             if not self._check(servo, result, error):
-                return  # the servos after it wait for its status packet
+                return False  # the servos after it wait for its status packet
             model = servo.model
             raw = bytes(data)
             load = int.from_bytes(raw[0:2], "little", signed=True)
@@ -224,6 +238,7 @@ class DynamixelBus:
             self.positions[i] = servo.angle(steps)
             self.velocities[i] = servo.direction * speed * model.speed_step
             self.loads[i] = servo.direction * load * model.load_step
+        return True
 
     def _decode_p1(self, i: int, raw: bytes) -> None:
         servo = self.servos[i]
