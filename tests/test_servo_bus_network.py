@@ -66,9 +66,9 @@ def test_the_robot_process_walks_on_the_emulated_bus_and_stops_on_the_watchdog(t
                 now = time.monotonic()
                 station.publish(ModeCommand.TOPIC, ModeCommand(Mode.WALKING, now))
                 station.publish(WalkCommand.TOPIC, WalkCommand(speed=0.05, stamp=now))
-                return status[-1].steps_taken >= 6
+                return status[-1].steps_taken >= 4
 
-            assert wait_for(station, walking, 40)
+            assert wait_for(station, walking, 60)
             assert Posture.RISING in postures and postures[-1] is Posture.STANDING
             assert status[-1].mode is Mode.WALKING
             # No more commands: the watchdog stands the robot still.

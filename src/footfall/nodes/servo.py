@@ -32,6 +32,7 @@ from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus
 
 STATUS_PERIOD = 0.5  # the servo status goes out at least this often [s]
+MAX_POSTURE_STEP = 0.1  # the longest a standing-up or sitting-down step covers [s]
 
 
 class ServoNode:
@@ -93,14 +94,19 @@ class ServoNode:
             self._set_posture(Posture.SITTING)
 
     def tick(self, t: float, dt: float) -> None:
-        """Move the legs one step while standing up or sitting down, at time ``t`` [s]."""
+        """Move the legs one step while standing up or sitting down, at time ``t`` [s].
+
+        A step covers the time since the last tick (ticks a late wall clock skipped
+        included, up to ``MAX_POSTURE_STEP``): the legs keep their rates in real time.
+        """
+        step = min(max(dt, t - self._time), MAX_POSTURE_STEP)
         self._time = t
         if t >= self._next_status:
             self._next_status = t + STATUS_PERIOD
             self.publish_status()
         if self.move is None or self.posture not in (Posture.RISING, Posture.SITTING):
             return
-        if self._send(self.move.step(dt, t)) and self.move.done:
+        if self._send(self.move.step(step, t)) and self.move.done:
             self.move = None
             if self.posture is Posture.RISING:
                 self._set_posture(Posture.STANDING)
