@@ -228,6 +228,44 @@ def test_bench_terrain_writes_its_table_and_chart(tmp_path, monkeypatch, capsys)
     assert "asleep" in capsys.readouterr().out
 
 
+def test_bench_terrain_walks_every_robot_and_gait(tmp_path, monkeypatch, capsys):
+    """`footfall bench terrain --robot A,B --gait G,H` walks every pair over the sweep: a
+    row per robot, gait and configuration, each pair's success rate, and each walk set up
+    as `footfall walk` sets it up (the robot's own height and stride, the gait's speed)."""
+    from footfall.motion.gait import GaitConfig
+    from footfall.reliability.variants import Variant, walk_variant
+    from footfall.robot.spec import load_spec
+    from footfall.sim.terrain import Stairs
+
+    monkeypatch.setattr(Stairs, "sweep", (0.04,))
+    out = tmp_path / "variants"
+    args = ["bench", "terrain", "--seeds", "1", "--seconds", "1", "--terrains", "stairs"]
+    args += ["--modes", "planned", "--robot", "default,phantomx", "--gait", "tripod,wave"]
+    assert main([*args, "--out", str(out)]) == 0
+    bench = json.loads((out / "bench.json").read_text())
+    pairs = [("default", "tripod"), ("default", "wave"), ("phantomx", "tripod")]
+    pairs.append(("phantomx", "wave"))
+    assert [(r["robot"], r["gait"]) for r in bench["results"]] == pairs
+    assert [(v["robot"], v["gait"], v["runs"]) for v in bench["variants"]] == [
+        (*pair, 1) for pair in pairs
+    ]
+    assert bench["robots"] == ["default", "phantomx"] and bench["gaits"] == ["tripod", "wave"]
+    assert (out / "bench.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    spec = load_spec("phantomx")
+    m = walk_variant(Variant("phantomx", "wave"), "stairs", seed=0, seconds=1.0).metrics
+    top = GaitConfig(kind="wave").for_robot(spec.stride_length, spec.max_step_height).max_speed
+    assert (m.setup.robot, m.setup.gait) == ("phantomx", "wave")
+    assert m.setup.commanded_body_height_m == spec.body_height
+    assert m.setup.stride_m == spec.stride_length
+    assert m.gait.commanded_speed_mps == pytest.approx(min(0.1, 0.75 * top))
+    capsys.readouterr()
+    for option, name in (("--gait", "tripod,hop"), ("--robot", "default,nobody")):
+        assert main(["bench", "terrain", option, name, "--out", str(tmp_path)]) == 2
+        assert name.split(",")[1] in capsys.readouterr().out
+    assert main(["bench", "faults", "--gait", "wave,wave", "--out", str(tmp_path)]) == 2
+    assert "more than once" in capsys.readouterr().out
+
+
 def test_walk_paced_to_the_wall_clock(tmp_path):
     """`footfall walk --realtime` runs the control loop on wall-clock deadlines: a second
     of walking takes about a second, and the overruns are counted."""

@@ -472,10 +472,12 @@ def test_bench_faults_and_soak_write_their_reports(tmp_path):
     out = tmp_path / "faults"
     args = ["bench", "faults", "--seeds", "1", "--seconds", "2", "--survey-seconds", "2"]
     args += ["--terrains", "flat", "--faults", "drop=0.3", "--jobs", "1", "--out", str(out)]
-    assert main(args) == 0
+    assert main([*args, "--robot", "phantomx", "--gait", "ripple"]) == 0
     bench = json.loads((out / "bench.json").read_text())
     (row,) = bench["results"]
-    assert {k: row[k] for k in ("fault", "terrain", "runs")} == {
+    assert {k: row[k] for k in ("robot", "gait", "fault", "terrain", "runs")} == {
+        "robot": "phantomx",
+        "gait": "ripple",
         "fault": "drop=0.3",
         "terrain": "flat",
         "runs": 1,
@@ -485,6 +487,8 @@ def test_bench_faults_and_soak_write_their_reports(tmp_path):
     assert row["failed_seeds"] == ([] if row["successes"] == 1 else [0])
     assert {"falls", "invalid_footholds", "success_rate"} <= bench.keys()
     assert bench["map_rmse"]["with_compensation_m"] > 0 and (out / "bench.png").stat().st_size
+    assert {s["robot"] for s in bench["map_rmse"]["surveys"]} == {"phantomx"}
+    assert [(v["robot"], v["gait"]) for v in bench["variants"]] == [("phantomx", "ripple")]
     soak = tmp_path / "soak"
     args = ["bench", "soak", "--minutes", "0.15", "--sample-seconds", "2", "--out", str(soak)]
     assert main(args) == 0

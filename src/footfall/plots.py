@@ -276,10 +276,17 @@ def _difficulty_unit(terrain: str) -> str:
 
 
 def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
-    """Success rate against difficulty for each mode, one panel a terrain."""
+    """Success rate against difficulty for each mode, one panel a terrain.
+
+    Where the benchmark walked several robots or gaits, each has its colour and each mode
+    its line style.
+    """
     rows = bench["results"]
     terrains = list(dict.fromkeys(r["terrain"] for r in rows))
     modes = list(dict.fromkeys(r["mode"] for r in rows))
+    variants = list(dict.fromkeys((r["robot"], r["gait"]) for r in rows))
+    lines_of = [(v, m) for v in variants for m in modes]
+    several = len(variants) > 1
     columns = min(len(terrains), 4)
     lines = -(-len(terrains) // columns)
     fig, axes = plt.subplots(
@@ -292,20 +299,23 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
         difficulty = next(r["difficulty"] for r in rows if r["terrain"] == terrain)
         sel_all = [r for r in rows if r["terrain"] == terrain]
         single = len({r["value"] for r in sel_all}) == 1
-        for k, mode in enumerate(modes):
-            sel = [r for r in sel_all if r["mode"] == mode]
+        for k, (variant, mode) in enumerate(lines_of):
+            sel = [r for r in sel_all if r["mode"] == mode and (r["robot"], r["gait"]) == variant]
             y = [r["successes"] / max(r["runs"], 1) for r in sel]
             falls = sum(r["falls"] for r in sel)
-            label = f"{mode} ({falls} falls)" if falls else mode
-            if single:  # one layout: a bar per mode
-                ax.bar([k], y, width=0.6, color=f"C{k}", label=label)
+            name = f"{variant[0]} {variant[1]} {mode}" if several else mode
+            label = f"{name} ({falls} falls)" if falls else name
+            color = f"C{variants.index(variant) if several else k}"
+            if single:  # one layout: a bar per line
+                ax.bar([k], y, width=0.6, color=color, label=label)
             else:
                 ax.plot(
-                    [r["value"] for r in sel], y, styles.get(mode, "o-"), color=f"C{k}", label=label
+                    [r["value"] for r in sel], y, styles.get(mode, "o-"), color=color, label=label
                 )
         ax.set_title(terrain)
         if single:
-            ax.set_xticks(range(len(modes)), modes)
+            names = [f"{v[0]} {v[1]} {m}" if several else m for v, m in lines_of]
+            ax.set_xticks(range(len(lines_of)), names, rotation=60 if several else 0, fontsize=7)
             value = sel_all[0]["value"]
             ax.set_xlabel("(single layout)" if difficulty == "none" else f"{difficulty} {value:g}")
         else:
@@ -313,7 +323,7 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
         ax.set_ylabel("success rate")
         ax.set_ylim(-0.05, 1.05)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7 if several else 8)
     rates = ", ".join(
         f"{mode} {bench[f'{mode}_success_rate']:.0%}"
         for mode in modes

@@ -125,6 +125,24 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "--out", type=Path, default=Path("footfall-out/bench-faults"), help="output folder"
     )
     faults.set_defaults(handler=run_faults)
+    for suite in (terrain, faults):
+        suite.add_argument(
+            "--robot",
+            type=_comma_list,
+            default=None,
+            metavar="ROBOT,ROBOT,...",
+            help=(
+                "robots to walk, each built-in (default, phantomx) or a robot TOML file; every "
+                "one is a row dimension of bench.json and the chart (default: default)"
+            ),
+        )
+        suite.add_argument(
+            "--gait",
+            type=_comma_list,
+            default=None,
+            metavar="GAIT,GAIT,...",
+            help="gaits every robot walks: tripod, ripple, wave (default: tripod)",
+        )
     soak = kinds.add_parser(
         "soak",
         help="a long run: memory and per-frame time over laps of a terrain",
@@ -194,11 +212,13 @@ def run_mapping(args: argparse.Namespace, console: Console) -> int:
 
 def run_terrain(args: argparse.Namespace, console: Console) -> int:
     """Walk the terrain sweep and print the results table."""
-    from footfall.benchmarking import terrain_benchmark_runs
+    from footfall.reliability.terrain_bench import terrain_benchmark_runs
+    from footfall.reliability.variants import parse_variants
     from footfall.reports.bench import run_terrain_bench
 
+    variants = parse_variants(args.robot, args.gait)
     with _progress(console, "walks") as progress:
-        total = terrain_benchmark_runs(max(args.seeds, 0), args.terrains, args.modes)
+        total = terrain_benchmark_runs(max(args.seeds, 0), args.terrains, args.modes, len(variants))
         task = progress.add_task("walking", total=total)
         report = run_terrain_bench(
             args.seeds,
@@ -208,11 +228,15 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
             terrains=args.terrains,
             first_seed=args.first_seed,
             modes=args.modes,
+            robots=args.robot,
+            gaits=args.gait,
         )
     paths = report.write(args.out)
     bench = report.to_json()
     table = Table(title=f"terrain benchmark, {args.seeds} seeds")
     for column in (
+        "robot",
+        "gait",
         "terrain",
         "difficulty",
         "mode",
@@ -226,6 +250,8 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
         table.add_column(column)
     for r in bench["results"]:
         table.add_row(
+            r["robot"],
+            r["gait"],
             r["terrain"],
             f"{r['difficulty']} {r['value']:g}" if r["difficulty"] != "none" else "-",
             r["mode"],
@@ -242,6 +268,7 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
         f"{bench['straight_success_rate']:.0%}, blind {bench['blind_success_rate']:.0%}; "
         f"route replans {bench['replan_ms_median']:.1f} ms median"
     )
+    _print_variants(console, bench)
     wrote(console, paths)
     return 0
 
@@ -254,13 +281,15 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
         fault_benchmark_runs,
         parse_fault_classes,
     )
+    from footfall.reliability.variants import parse_variants
     from footfall.reports.bench import run_faults_bench
 
     faults = parse_fault_classes(args.faults) if args.faults else FAULT_CLASSES
     terrains = tuple(args.terrains) if args.terrains else FAULT_TERRAINS
+    variants = parse_variants(args.robot, args.gait)
     with _progress(console, "runs") as progress:
         task = progress.add_task(
-            "walking", total=fault_benchmark_runs(max(args.seeds, 0), faults, terrains)
+            "walking", total=fault_benchmark_runs(max(args.seeds, 0), faults, terrains, variants)
         )
         report = run_faults_bench(
             args.seeds,
@@ -271,14 +300,19 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
             on_run=lambda label: progress.update(task, advance=1, description=label),
             survey_seconds=args.survey_seconds,
             first_seed=args.first_seed,
+            robots=args.robot,
+            gaits=args.gait,
         )
     paths = report.write(args.out)
     bench = report.to_json()
     table = Table(title=f"fault benchmark, {args.seeds} seeds")
-    for column in ("fault", "terrain", "success", "falls", "invalid", "frozen", "recovered"):
+    columns = ("robot", "gait", "fault", "terrain", "success", "falls", "invalid", "frozen")
+    for column in (*columns, "recovered"):
         table.add_column(column)
     for r in bench["results"]:
         table.add_row(
+            r["robot"],
+            r["gait"],
             r["fault"],
             r["terrain"],
             f"{r['successes']}/{r['runs']}",
@@ -295,8 +329,20 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
         f"{1e3 * rmse['without_compensation_m']:.1f} mm without drift compensation, "
         f"{1e3 * rmse['with_compensation_m']:.1f} mm with"
     )
+    _print_variants(console, bench)
     wrote(console, paths)
     return 0
+
+
+def _print_variants(console: Console, bench: dict) -> None:
+    """Each robot and gait's success, where the benchmark walked more than one."""
+    if len(bench["variants"]) < 2:
+        return
+    for v in bench["variants"]:
+        console.print(
+            f"{v['robot']} {v['gait']}: {v['successes']}/{v['runs']} ({v['success_rate']:.0%}), "
+            f"{v['falls']} falls, {v['invalid_footholds']} invalid footholds"
+        )
 
 
 def run_soak(args: argparse.Namespace, console: Console) -> int:

@@ -19,6 +19,7 @@ from collections.abc import Callable, Sequence
 
 from footfall.benchmarking import run_parallel
 from footfall.errors import ConfigError
+from footfall.reliability.variants import Variant, parse_variants, variant_rates, walk_variant
 from footfall.runtime.fault_spec import FaultSpec
 
 # The fault classes and the strength each is walked with.
@@ -38,36 +39,32 @@ FAULT_TERRAINS = ("stairs", "cobblestones", "course")
 RMSE_TERRAINS = ("cobblestones", "course")
 RMSE_SECONDS = 20.0
 
-Job = tuple[str, str, str, int, float]
+# (robot, gait, fault label, fault spec, terrain, seed, seconds)
+Job = tuple[str, str, str, str, str, int, float]
+DEFAULT_VARIANT = Variant("default", "tripod")
 
 
-def faulty_walk(terrain: str, spec: str, seed: int = 0, seconds: float = 90.0):
+def faulty_walk(
+    terrain: str,
+    spec: str,
+    seed: int = 0,
+    seconds: float = 90.0,
+    variant: Variant = DEFAULT_VARIANT,
+):
     """The planned robot walking ``terrain`` to its goal with the faults ``spec``.
 
     Returns:
         The :class:`~footfall.sim.walk.WalkResult`.
     """
-    from footfall.robot.spec import load_spec
-    from footfall.sim.walk import simulate_walk
-    from footfall.sim.walk_settings import WalkSettings
-
-    settings = WalkSettings(
-        terrain=terrain,
-        seconds=seconds,
-        blind=False,
-        seed=seed,
-        stop_at_goal=True,
-        faults=FaultSpec.parse(spec),
-    )
-    return simulate_walk(load_spec("default"), settings)
+    return walk_variant(variant, terrain, seed, seconds, faults=spec)
 
 
 def _walk(job: Job) -> dict[str, object]:
-    """One walk: ``(fault label, spec, terrain, seed, seconds)``."""
+    """One walk of the benchmark."""
     from footfall.sim.walk_metrics import WalkMetrics
 
-    _, spec, terrain, seed, seconds = job
-    m = faulty_walk(terrain, spec, seed, seconds).metrics
+    robot, gait, _, spec, terrain, seed, seconds = job
+    m = faulty_walk(terrain, spec, seed, seconds, Variant(robot, gait)).metrics
     assert isinstance(m, WalkMetrics)  # a simulated walk always walks
     r = m.robustness
     stopped = r.freezes + r.stale_stops
@@ -84,14 +81,14 @@ def _walk(job: Job) -> dict[str, object]:
     }
 
 
-def _map_error(job: tuple[str, int, bool, float]) -> float:
-    """Height RMSE of a SLAM-noise survey, ``(terrain, seed, compensate, seconds)`` [m]."""
+def _map_error(job: tuple[str, str, int, bool, float]) -> float:
+    """Height RMSE of a SLAM-noise survey, ``(robot, terrain, seed, compensate, seconds)`` [m]."""
     from footfall.mapping.drift import DriftConfig
     from footfall.mapping.engine import HeightMapConfig
     from footfall.robot.spec import load_spec
     from footfall.sim.survey import MappingSettings, simulate_mapping
 
-    terrain, seed, compensate, seconds = job
+    robot, terrain, seed, compensate, seconds = job
     settings = MappingSettings(
         terrain=terrain,
         seconds=seconds,
@@ -99,14 +96,18 @@ def _map_error(job: tuple[str, int, bool, float]) -> float:
         seed=seed,
         map=HeightMapConfig(drift=DriftConfig(enabled=compensate)),
     )
-    return float(simulate_mapping(load_spec("default"), settings).metrics["height_rmse_m"])
+    return float(simulate_mapping(load_spec(robot), settings).metrics["height_rmse_m"])
 
 
 def fault_benchmark_runs(
-    seeds: int, faults: Sequence[tuple[str, str]], terrains: Sequence[str]
+    seeds: int,
+    faults: Sequence[tuple[str, str]],
+    terrains: Sequence[str],
+    variants: Sequence[Variant] = (DEFAULT_VARIANT,),
 ) -> int:
     """How many walks and surveys :func:`run_fault_benchmark` makes."""
-    return seeds * (len(faults) * len(terrains) + 2 * len(RMSE_TERRAINS))
+    robots = len({v.robot for v in variants})
+    return seeds * (len(variants) * len(faults) * len(terrains) + robots * 2 * len(RMSE_TERRAINS))
 
 
 def parse_fault_classes(specs: Sequence[str]) -> tuple[tuple[str, str], ...]:
@@ -125,18 +126,22 @@ def run_fault_benchmark(
     on_run: Callable[[str], None] | None = None,
     survey_seconds: float = RMSE_SECONDS,
     first_seed: int = 0,
+    robots: Sequence[str] | None = None,
+    gaits: Sequence[str] | None = None,
 ) -> dict[str, object]:
     """Walk every fault class on every terrain ``seeds`` times, and survey the map error.
 
     Each survey walks ``survey_seconds`` under SLAM noise, without and with compensation.
-    The seeds are ``first_seed`` to ``first_seed + seeds - 1``.
+    The seeds are ``first_seed`` to ``first_seed + seeds - 1``. Every robot in ``robots``
+    walks every gait in ``gaits`` (the default robot's tripod by default); each robot is
+    surveyed.
 
     Returns:
-        ``results`` rows (``fault``, ``spec``, ``terrain``, ``runs``, ``successes``,
-        ``falls``, ``invalid_footholds``, ``frozen``, ``recovered``, ``failed_seeds``,
-        ``wall_seconds``),
-        totals ``falls``, ``invalid_footholds`` and ``success_rate``, and ``map_rmse`` with
-        the survey's mean height RMSE without and with drift compensation.
+        ``results`` rows (``robot``, ``gait``, ``fault``, ``spec``, ``terrain``, ``runs``,
+        ``successes``, ``falls``, ``invalid_footholds``, ``frozen``, ``recovered``,
+        ``failed_seeds``, ``wall_seconds``), totals ``falls``, ``invalid_footholds`` and
+        ``success_rate``, the same per robot and gait (``variants``), and ``map_rmse`` with
+        the surveys' mean height RMSE without and with drift compensation.
     """
     if seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {seeds}")
@@ -148,15 +153,22 @@ def run_fault_benchmark(
         TERRAINS.check(terrain)  # an unknown name is an error that lists the known ones
     for _, spec in faults:
         FaultSpec.parse(spec)
+    variants = parse_variants(robots, gaits)
+    surveyed = list(dict.fromkeys(v.robot for v in variants))
 
     def progress(job: object) -> None:
         if on_run is not None:
             assert isinstance(job, tuple)
-            on_run(" ".join(str(part) for part in job[:4]))
+            # A walk: robot, gait, fault, spec, terrain, seed; a survey: robot, terrain, seed.
+            shown = job[2:6] if len(job) == 7 else job[1:4]
+            who = job[:2] if len(job) == 7 else job[:1]
+            parts = (*who, *shown) if len(variants) > 1 else shown
+            on_run(" ".join(str(part) for part in parts))
 
     seed_range = range(first_seed, first_seed + seeds)
     walks: list[Job] = [
-        (label, spec, terrain, seed, seconds)
+        (*variant, label, spec, terrain, seed, seconds)
+        for variant in variants
         for label, spec in faults
         for terrain in terrains
         for seed in seed_range
@@ -164,7 +176,8 @@ def run_fault_benchmark(
     if not (math.isfinite(survey_seconds) and survey_seconds > 0):
         raise ConfigError(f"--survey-seconds must be positive, got {survey_seconds}")
     surveys = [
-        (terrain, seed, compensate, survey_seconds)
+        (robot, terrain, seed, compensate, survey_seconds)
+        for robot in surveyed
         for terrain in RMSE_TERRAINS
         for seed in seed_range
         for compensate in (False, True)
@@ -172,36 +185,31 @@ def run_fault_benchmark(
     outcomes = run_parallel(_walk, walks, jobs, progress)
     errors = run_parallel(_map_error, surveys, jobs, progress)
     rows = []
-    for label, spec in faults:
-        for terrain in terrains:
-            runs = [outcomes[(label, spec, terrain, seed, seconds)] for seed in seed_range]
-            rows.append(
-                {
-                    "fault": label,
-                    "spec": spec,
-                    "terrain": terrain,
-                    "runs": len(runs),
-                    "successes": sum(bool(r["success"]) for r in runs),
-                    "falls": sum(bool(r["fell"]) for r in runs),
-                    "invalid_footholds": sum(int(r["invalid_footholds"]) for r in runs),
-                    "frozen": sum(bool(r["frozen"]) for r in runs),
-                    "recovered": sum(bool(r["recovered"]) for r in runs),
-                    "failed_seeds": [
-                        seed for seed, r in zip(seed_range, runs, strict=True) if not r["success"]
-                    ],
-                    "wall_seconds": float(sum(float(r["wall_seconds"]) for r in runs)),
-                }
-            )
+    for variant in variants:
+        for label, spec in faults:
+            for terrain in terrains:
+                key = (*variant, label, spec, terrain)
+                runs = [outcomes[(*key, seed, seconds)] for seed in seed_range]
+                rows.append(_row(key, runs, seed_range))
     total_runs = sum(r["runs"] for r in rows)
     per_survey = [
-        {"terrain": t, "seed": s, "compensated": c, "height_rmse_m": errors[(t, s, c, d)]}
-        for t, s, c, d in surveys
+        {
+            "robot": r,
+            "terrain": t,
+            "seed": s,
+            "compensated": c,
+            "height_rmse_m": errors[(r, t, s, c, d)],
+        }
+        for r, t, s, c, d in surveys
     ]
     return {
         "seeds": seeds,
         "first_seed": first_seed,
         "seconds": seconds,
+        "robots": surveyed,
+        "gaits": list(dict.fromkeys(v.gait for v in variants)),
         "results": rows,
+        "variants": variant_rates(rows, variants, ()),
         "falls": sum(r["falls"] for r in rows),
         "invalid_footholds": sum(r["invalid_footholds"] for r in rows),
         "success_rate": sum(r["successes"] for r in rows) / max(total_runs, 1),
@@ -216,4 +224,26 @@ def run_fault_benchmark(
             ),
             "surveys": per_survey,
         },
+    }
+
+
+def _row(key: tuple, runs: Sequence[dict], seed_range: range) -> dict[str, object]:
+    """One ``results`` row: a robot, gait, fault and terrain over the seeds."""
+    robot, gait, label, spec, terrain = key
+    return {
+        "robot": robot,
+        "gait": gait,
+        "fault": label,
+        "spec": spec,
+        "terrain": terrain,
+        "runs": len(runs),
+        "successes": sum(bool(r["success"]) for r in runs),
+        "falls": sum(bool(r["fell"]) for r in runs),
+        "invalid_footholds": sum(int(r["invalid_footholds"]) for r in runs),
+        "frozen": sum(bool(r["frozen"]) for r in runs),
+        "recovered": sum(bool(r["recovered"]) for r in runs),
+        "failed_seeds": [
+            seed for seed, r in zip(seed_range, runs, strict=True) if not r["success"]
+        ],
+        "wall_seconds": float(sum(float(r["wall_seconds"]) for r in runs)),
     }

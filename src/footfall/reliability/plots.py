@@ -12,19 +12,25 @@ from footfall.plots import plt, save_figure
 def plot_fault_benchmark(bench: dict, path: Path) -> Path:
     """Success rate of every fault class on every terrain, with falls and invalid footholds.
 
-    Left, a fault x terrain grid coloured by success rate, each cell labelled
+    Left, a fault x terrain grid (a line per robot, gait and fault where the benchmark
+    walked several robots or gaits) coloured by success rate, each cell labelled
     ``successes/runs`` (and ``F`` falls, ``I`` invalid footholds when any); right, the map's
     height RMSE under SLAM noise without and with drift compensation.
     """
     rows = bench["results"]
-    faults = list(dict.fromkeys(r["fault"] for r in rows))
+    several = len({(r.get("robot"), r.get("gait")) for r in rows}) > 1
+
+    def line(r: dict) -> str:
+        return f"{r['robot']} {r['gait']} {r['fault']}" if several else r["fault"]
+
+    faults = list(dict.fromkeys(line(r) for r in rows))
     terrains = list(dict.fromkeys(r["terrain"] for r in rows))
     rate = np.full((len(faults), len(terrains)), np.nan)
     fig, (ax, ax_rmse) = plt.subplots(
         1, 2, figsize=(11, 0.45 * len(faults) + 2.5), width_ratios=(3, 1), constrained_layout=True
     )
     for r in rows:
-        i, j = faults.index(r["fault"]), terrains.index(r["terrain"])
+        i, j = faults.index(line(r)), terrains.index(r["terrain"])
         rate[i, j] = r["successes"] / max(r["runs"], 1)
         label = f"{r['successes']}/{r['runs']}"
         if r["falls"]:

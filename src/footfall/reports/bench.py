@@ -66,9 +66,11 @@ def run_terrain_bench(
     terrains: Sequence[str] | None = None,
     first_seed: int = 0,
     modes: Sequence[str] | None = None,
+    robots: Sequence[str] | None = None,
+    gaits: Sequence[str] | None = None,
 ) -> BenchReport:
     """Planned, straight and blind walking over the terrain sweep (``run_terrain_benchmark``)."""
-    from footfall.benchmarking import run_terrain_benchmark
+    from footfall.reliability.terrain_bench import run_terrain_benchmark
 
     if seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {seeds}")
@@ -84,6 +86,8 @@ def run_terrain_bench(
             terrains=terrains,
             first_seed=first_seed,
             modes=modes,
+            robots=robots,
+            gaits=gaits,
         ),
     )
 
@@ -97,6 +101,8 @@ def run_faults_bench(
     on_run: Callable[[str], None] | None = None,
     survey_seconds: float = 20.0,
     first_seed: int = 0,
+    robots: Sequence[str] | None = None,
+    gaits: Sequence[str] | None = None,
 ) -> BenchReport:
     """Every fault class on every terrain (see ``run_fault_benchmark``)."""
     from footfall.reliability.faults_bench import (
@@ -114,6 +120,8 @@ def run_faults_bench(
         on_run=on_run,
         survey_seconds=survey_seconds,
         first_seed=first_seed,
+        robots=robots,
+        gaits=gaits,
     )
     return BenchReport("faults", figures)
 

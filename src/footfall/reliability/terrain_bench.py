@@ -1,0 +1,247 @@
+"""``footfall bench terrain``: every terrain over its difficulty range, in three modes.
+
+The modes are planned (the full loop with route planning), straight (the same loop on the
+straight line, the thesis' behaviour) and blind (the thesis' baseline). Each robot and gait
+asked for (:mod:`footfall.reliability.variants`) walks the whole sweep; a row of the results
+is one robot, gait, terrain, difficulty and mode over the seeds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from footfall.benchmarking import run_parallel
+from footfall.errors import ConfigError
+from footfall.reliability.variants import Variant, parse_variants, variant_rates, walk_variant
+
+# The modes: the full loop with route planning, the same on the straight line (the
+# thesis' behaviour), and the blind baseline.
+TERRAIN_MODES = ("planned", "straight", "blind")
+
+# (robot, gait, terrain, swept parameter, value, mode, seed, seconds)
+Job = tuple[str, str, str, str, float, str, int, float]
+
+
+def terrain_sweep(
+    terrains: Sequence[str] | None = None,
+) -> tuple[tuple[str, str, tuple[float, ...]], ...]:
+    """What ``footfall bench terrain`` walks: ``(terrain, swept parameter, values)``.
+
+    Every registered terrain that is benchmarked (or the named ones), in registration
+    order; a terrain without a difficulty parameter is walked once, as ``("none", (0.0,))``.
+
+    Raises:
+        ConfigError: On a name the sweep does not hold.
+    """
+    from footfall.sim.terrains import TERRAINS
+
+    sweep = []
+    for name in TERRAINS:
+        kind = TERRAINS.get(name)
+        if kind.benchmarked:
+            if kind.difficulty is not None and kind.sweep:
+                sweep.append((name, kind.difficulty, tuple(kind.sweep)))
+            else:
+                sweep.append((name, "none", (0.0,)))
+    if terrains is None:
+        return tuple(sweep)
+    known = {name for name, _, _ in sweep}
+    unknown = [t for t in terrains if t not in known]
+    if unknown:
+        raise ConfigError(
+            f"no terrain {', '.join(map(repr, unknown))} in the sweep; choose from "
+            f"{', '.join(name for name, _, _ in sweep)}"
+        )
+    return tuple(entry for entry in sweep if entry[0] in terrains)
+
+
+def terrain_modes(modes: Sequence[str] | None = None) -> tuple[str, ...]:
+    """The named modes (all by default), in ``TERRAIN_MODES``' order.
+
+    Raises:
+        ConfigError: On a mode that is not one of them.
+    """
+    if modes is None:
+        return TERRAIN_MODES
+    unknown = [m for m in modes if m not in TERRAIN_MODES]
+    if unknown or not modes:
+        raise ConfigError(
+            f"no mode {', '.join(map(repr, unknown)) or 'given'}; choose from "
+            f"{', '.join(TERRAIN_MODES)}"
+        )
+    return tuple(m for m in TERRAIN_MODES if m in modes)
+
+
+def _terrain_run(job: Job) -> dict[str, object]:
+    """One walk of the sweep."""
+    from footfall.sim.terrains import TERRAINS
+    from footfall.sim.walk_metrics import WalkMetrics
+
+    robot, gait, name, difficulty, value, mode, seed, seconds = job
+    result = walk_variant(
+        Variant(robot, gait),
+        name,
+        seed,
+        seconds,
+        difficulty=None if difficulty == "none" else value,
+        blind=mode == "blind",
+        straight=mode == "straight",
+    )
+    m = result.metrics
+    assert isinstance(m, WalkMetrics)  # a simulated walk always walks
+    invalid = m.footholds.invalid_footholds or 0
+    safe = not m.fell and invalid == 0
+    navigation = m.navigation
+    no_route = navigation is not None and navigation.no_route
+    if not TERRAINS.get(name).has_route:
+        # Standing still with the reason: the navigator's "no route", or a freeze that
+        # says why (the thesis' robot at a wall).
+        success = safe and not m.reached_goal and (no_route or m.outcome.frozen)
+    else:
+        success = safe and m.reached_goal
+    reason = (navigation.no_route_reason if navigation is not None else "") or (
+        m.outcome.frozen_reason
+    )
+
+    def replan_ms(value: float | None) -> float:
+        return float("nan") if value is None else float(value)
+
+    return {
+        "success": success,
+        "fell": m.fell,
+        "invalid_footholds": invalid,
+        "frozen": m.outcome.frozen,
+        "no_route": no_route,
+        "reason": reason,
+        "tilt_max_deg": m.gait.tilt_max_deg,
+        "sim_seconds": m.gait.sim_seconds,
+        "wall_seconds": m.gait.wall_seconds,
+        "replan_ms_median": replan_ms(navigation and navigation.replan_ms_median),
+        "replan_ms_p95": replan_ms(navigation and navigation.replan_ms_p95),
+    }
+
+
+def run_terrain_benchmark(
+    seeds: int,
+    seconds: float = 150.0,
+    on_run: Callable[[str], None] | None = None,
+    jobs: int = 1,
+    terrains: Sequence[str] | None = None,
+    first_seed: int = 0,
+    modes: Sequence[str] | None = None,
+    robots: Sequence[str] | None = None,
+    gaits: Sequence[str] | None = None,
+) -> dict[str, object]:
+    """The terrain sweep in every mode (or ``modes``), ``seeds`` runs per configuration.
+
+    Success = reached the goal, no fall, zero invalid footholds; on a terrain without a
+    route (``Terrain.has_route`` False): stood still and said why, no fall, zero invalid.
+
+    Args:
+        seeds: Runs per terrain, difficulty and mode.
+        seconds: Longest walk [s].
+        on_run: Called with a label after each run (progress display).
+        jobs: Walks simulated at once, each in its own process.
+        terrains: Terrains of the sweep to walk (all by default).
+        first_seed: The seeds run from this one up.
+        modes: Modes to walk (all of ``TERRAIN_MODES`` by default); a mode not walked has
+            no success rate.
+        robots: Robots to walk (built-in names or TOML files; the default robot by default).
+        gaits: Gaits each robot walks (tripod by default).
+
+    Returns:
+        Per configuration (``results``: robot, gait, terrain, difficulty, value, mode):
+        runs, successes, falls, invalid footholds, frozen runs, runs without a route,
+        median tilt, the reasons given, the failed seeds, wall time; overall
+        ``planned_success_rate``, ``straight_success_rate`` and ``blind_success_rate``;
+        the same per robot and gait (``variants``); and the route planner's replan times
+        over the planned runs.
+    """
+    variants = parse_variants(robots, gaits)
+    sweep = terrain_sweep(terrains)
+    chosen = terrain_modes(modes)
+    configs = [
+        (*variant, name, difficulty, value, mode)
+        for variant in variants
+        for name, difficulty, values in sweep
+        for value in values
+        for mode in chosen
+    ]
+    seed_range = range(first_seed, first_seed + seeds)
+    work = [(*config, seed, seconds) for config in configs for seed in seed_range]
+    several = len(variants) > 1
+
+    def done(job: Job) -> None:
+        if on_run is not None:
+            robot, gait, name, difficulty, value, mode, seed, _ = job
+            who = f"{robot} {gait} " if several else ""
+            on_run(f"{who}{name} {difficulty}={value:g} {mode} seed {seed}")
+
+    runs = run_parallel(_terrain_run, work, jobs, done)
+    rows = []
+    for config in configs:
+        outcomes = [runs[(*config, seed, seconds)] for seed in seed_range]
+        robot, gait, name, difficulty, value, mode = config
+        rows.append(
+            {
+                "robot": robot,
+                "gait": gait,
+                "terrain": name,
+                "difficulty": difficulty,
+                "value": value,
+                "mode": mode,
+                "runs": len(outcomes),
+                "successes": sum(bool(o["success"]) for o in outcomes),
+                "falls": sum(bool(o["fell"]) for o in outcomes),
+                "invalid_footholds": sum(int(o["invalid_footholds"]) for o in outcomes),
+                "frozen": sum(bool(o["frozen"]) for o in outcomes),
+                "no_route": sum(bool(o["no_route"]) for o in outcomes),
+                "median_tilt_max_deg": float(np.median([o["tilt_max_deg"] for o in outcomes]))
+                if outcomes
+                else float("nan"),
+                "reasons": sorted({str(o["reason"]) for o in outcomes if o["reason"]}),
+                "failed_seeds": [
+                    seed for seed, o in zip(seed_range, outcomes, strict=True) if not o["success"]
+                ],
+                "wall_seconds": float(sum(o["wall_seconds"] for o in outcomes)),
+            }
+        )
+
+    def rate(mode: str) -> float:
+        mine = [r for r in rows if r["mode"] == mode]
+        runs_of_mode = sum(r["runs"] for r in mine)
+        if not runs_of_mode:
+            return float("nan")
+        return sum(r["successes"] for r in mine) / runs_of_mode
+
+    planned = [runs[job] for job in work if job[5] == "planned"]
+    medians = [o["replan_ms_median"] for o in planned if np.isfinite(o["replan_ms_median"])]
+    p95s = [o["replan_ms_p95"] for o in planned if np.isfinite(o["replan_ms_p95"])]
+    return {
+        "seeds": seeds,
+        "first_seed": first_seed,
+        "robots": list(dict.fromkeys(v.robot for v in variants)),
+        "gaits": list(dict.fromkeys(v.gait for v in variants)),
+        "terrains": [name for name, _, _ in sweep],
+        "modes": list(chosen),
+        "results": rows,
+        "variants": variant_rates(rows, variants, chosen),
+        "planned_success_rate": rate("planned"),
+        "straight_success_rate": rate("straight"),
+        "blind_success_rate": rate("blind"),
+        "replan_ms_median": float(np.median(medians)) if medians else float("nan"),
+        "replan_ms_p95_max": float(np.max(p95s)) if p95s else float("nan"),
+    }
+
+
+def terrain_benchmark_runs(
+    seeds: int,
+    terrains: Sequence[str] | None = None,
+    modes: Sequence[str] | None = None,
+    variants: int = 1,
+) -> int:
+    """How many walks :func:`run_terrain_benchmark` makes for ``variants`` robot-gait pairs."""
+    sweep = terrain_sweep(terrains)
+    return variants * len(terrain_modes(modes)) * seeds * sum(len(v) for _, _, v in sweep)
