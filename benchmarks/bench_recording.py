@@ -16,7 +16,8 @@ import time
 from pathlib import Path
 
 from footfall.recording.replay import Replayer, ReplayRequest
-from footfall.reports.walk import WalkRequest, prepare_walk, run_walk
+from footfall.reports.walk import run_walk
+from footfall.sim.walk_request import WalkRequest, prepare_walk
 
 SECONDS = 6.0
 

@@ -29,9 +29,9 @@ from pathlib import Path
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 from footfall.messages import Message
-from footfall.reports.walk import WalkRequest, prepare_walk
 from footfall.runtime.bus import InProcessBus
 from footfall.sim.walk import simulate_walk
+from footfall.sim.walk_request import WalkRequest, prepare_walk
 
 ROOT = Path(__file__).resolve().parents[1]
 # Run in a subprocess with an older source tree: the walk's real-time factor.

@@ -210,9 +210,9 @@ def test_hundreds_of_overlapping_and_tiny_obstacles_plan_or_refuse():
 def small_recording(tmp_path_factory):
     """A 1 s recorded walk on stairs, for mutation."""
     from footfall.recording.session import Recorders
-    from footfall.reports.walk import WalkRequest, prepare_walk
     from footfall.runtime.bus import InProcessBus
     from footfall.sim.walk import simulate_walk
+    from footfall.sim.walk_request import WalkRequest, prepare_walk
 
     path = tmp_path_factory.mktemp("fuzzrec") / "walk.mcap"
     job = prepare_walk(WalkRequest(terrain="stairs", seconds=0.4, image_size=(64, 48)))
@@ -420,9 +420,9 @@ def test_malformed_recording_metadata_is_a_dataset_error(tmp_path):
     """Regression: a garbled footfall/mapping record raised ValueError from float()."""
     from footfall.errors import DatasetError
     from footfall.recording.session import Recorders
-    from footfall.reports.walk import WalkRequest, prepare_walk
     from footfall.runtime.bus import InProcessBus
     from footfall.sim.walk import simulate_walk
+    from footfall.sim.walk_request import WalkRequest, prepare_walk
 
     path = tmp_path / "bad.mcap"
     job = prepare_walk(WalkRequest(terrain="flat", seconds=0.3, image_size=(64, 48)))

@@ -14,9 +14,9 @@ from footfall.errors import DatasetError
 from footfall.recording.replay import Replayer, ReplayRequest
 from footfall.recording.ros_types import typestore
 from footfall.recording.session import Recorders
-from footfall.reports.walk import WalkRequest, prepare_walk
 from footfall.runtime.bus import InProcessBus
 from footfall.sim.walk import simulate_walk
+from footfall.sim.walk_request import WalkRequest, prepare_walk
 
 LAYERS = ("heights", "known", "spread", "variance")
 

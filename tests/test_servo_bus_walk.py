@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from footfall.cli import main
-from footfall.reports.walk import WalkRequest, prepare_walk
 from footfall.sim.walk import simulate_walk
+from footfall.sim.walk_request import WalkRequest, prepare_walk
 
 
 def walk(tmp_path, *args: str) -> dict:

@@ -156,7 +156,7 @@ def test_skipped_ticks_keep_the_physics_on_the_controller_clock(default_spec):
 def test_a_default_walk_has_the_time_to_reach_its_goal():
     """With no --seconds, a walk gets twice the straight line's time to the goal at its
     speed (at least 60 s): the slow wave gait as much as it needs."""
-    from footfall.reports.walk import WalkRequest, prepare_walk
+    from footfall.sim.walk_request import WalkRequest, prepare_walk
 
     for gait in ("tripod", "wave"):
         for terrain in ("stairs", "cobblestones", "course"):

@@ -125,23 +125,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "--out", type=Path, default=Path("footfall-out/bench-faults"), help="output folder"
     )
     faults.set_defaults(handler=run_faults)
+    robots = (
+        "robots to walk, each built-in (default, phantomx) or a robot TOML file; every one is "
+        "a row dimension of bench.json and the chart"
+    )
+    gaits = "gaits every robot walks: tripod, ripple, wave"
     for suite in (terrain, faults):
         suite.add_argument(
-            "--robot",
-            type=_comma_list,
-            default=None,
-            metavar="ROBOT,ROBOT,...",
-            help=(
-                "robots to walk, each built-in (default, phantomx) or a robot TOML file; every "
-                "one is a row dimension of bench.json and the chart (default: default)"
-            ),
+            "--robot", type=_comma_list, default=["default"], metavar="ROBOT,...", help=robots
         )
         suite.add_argument(
-            "--gait",
-            type=_comma_list,
-            default=None,
-            metavar="GAIT,GAIT,...",
-            help="gaits every robot walks: tripod, ripple, wave (default: tripod)",
+            "--gait", type=_comma_list, default=["tripod"], metavar="GAIT,...", help=gaits
         )
     soak = kinds.add_parser(
         "soak",
@@ -213,7 +207,7 @@ def run_mapping(args: argparse.Namespace, console: Console) -> int:
 def run_terrain(args: argparse.Namespace, console: Console) -> int:
     """Walk the terrain sweep and print the results table."""
     from footfall.reliability.terrain_bench import terrain_benchmark_runs
-    from footfall.reliability.variants import parse_variants
+    from footfall.reliability.variants import parse_variants, variant_lines
     from footfall.reports.bench import run_terrain_bench
 
     variants = parse_variants(args.robot, args.gait)
@@ -234,19 +228,8 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
     paths = report.write(args.out)
     bench = report.to_json()
     table = Table(title=f"terrain benchmark, {args.seeds} seeds")
-    for column in (
-        "robot",
-        "gait",
-        "terrain",
-        "difficulty",
-        "mode",
-        "success",
-        "falls",
-        "invalid",
-        "frozen",
-        "no route",
-        "tilt (median)",
-    ):
+    columns = "robot gait terrain difficulty mode success falls invalid frozen".split()
+    for column in (*columns, "no route", "tilt (median)"):
         table.add_column(column)
     for r in bench["results"]:
         table.add_row(
@@ -268,7 +251,8 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
         f"{bench['straight_success_rate']:.0%}, blind {bench['blind_success_rate']:.0%}; "
         f"route replans {bench['replan_ms_median']:.1f} ms median"
     )
-    _print_variants(console, bench)
+    for line in variant_lines(bench):
+        console.print(line)
     wrote(console, paths)
     return 0
 
@@ -281,7 +265,7 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
         fault_benchmark_runs,
         parse_fault_classes,
     )
-    from footfall.reliability.variants import parse_variants
+    from footfall.reliability.variants import parse_variants, variant_lines
     from footfall.reports.bench import run_faults_bench
 
     faults = parse_fault_classes(args.faults) if args.faults else FAULT_CLASSES
@@ -329,20 +313,10 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
         f"{1e3 * rmse['without_compensation_m']:.1f} mm without drift compensation, "
         f"{1e3 * rmse['with_compensation_m']:.1f} mm with"
     )
-    _print_variants(console, bench)
+    for line in variant_lines(bench):
+        console.print(line)
     wrote(console, paths)
     return 0
-
-
-def _print_variants(console: Console, bench: dict) -> None:
-    """Each robot and gait's success, where the benchmark walked more than one."""
-    if len(bench["variants"]) < 2:
-        return
-    for v in bench["variants"]:
-        console.print(
-            f"{v['robot']} {v['gait']}: {v['successes']}/{v['runs']} ({v['success_rate']:.0%}), "
-            f"{v['falls']} falls, {v['invalid_footholds']} invalid footholds"
-        )
 
 
 def run_soak(args: argparse.Namespace, console: Console) -> int:

@@ -190,7 +190,7 @@ def _options(option: str, items: list[str]) -> dict[str, str]:
 def run(args: argparse.Namespace, console: Console) -> int:
     """Run the robot until it is stopped; write its record."""
     from footfall.reports.robot import BipedRequest, RobotRequest, run_biped, run_robot_report
-    from footfall.reports.walk import WalkRequest
+    from footfall.sim.walk_request import WalkRequest
 
     if args.biped:
         request = BipedRequest(

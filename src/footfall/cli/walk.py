@@ -44,8 +44,8 @@ SUMMARY = (
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``walk``."""
-    from footfall.reports.walk import DEFAULT_SPEED_MPS
     from footfall.sim.terrains import TERRAINS, difficulty_parameters
+    from footfall.sim.walk_request import DEFAULT_SPEED_MPS
 
     p = subparsers.add_parser(
         "walk",
@@ -187,7 +187,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace, console: Console) -> int:
     """Walk, write the outputs, print the summary."""
-    from footfall.reports.walk import WalkRequest, prepare_walk, run_walk
+    from footfall.reports.walk import run_walk
+    from footfall.sim.walk_request import WalkRequest, prepare_walk
 
     backend, options = "sim", {}
     if args.servo_bus is not None:

@@ -2,7 +2,7 @@
 
 ``footfall bench terrain`` and ``bench faults`` take ``--robot`` and ``--gait`` lists; every
 pair walks the whole suite, and each walk is set up the way ``footfall walk`` sets it up
-(:func:`footfall.reports.walk.prepare_walk`): the robot's nominal height and stride, the
+(:func:`footfall.sim.walk_request.prepare_walk`): the robot's nominal height and stride, the
 gait's default speed (0.1 m/s, or 3/4 of the gait's top speed where that is less).
 """
 
@@ -71,8 +71,8 @@ def walk_variant(
     Returns:
         The :class:`~footfall.sim.walk_settings.WalkResult`.
     """
-    from footfall.reports.walk import WalkRequest, prepare_walk
     from footfall.sim.walk import simulate_walk
+    from footfall.sim.walk_request import WalkRequest, prepare_walk
 
     job = prepare_walk(
         WalkRequest(
@@ -119,3 +119,14 @@ def variant_rates(rows: Sequence[dict], variants: Sequence[Variant], modes: Sequ
             )
         out.append(entry)
     return out
+
+
+def variant_lines(bench: dict) -> list[str]:
+    """Each robot and gait's success as a line, where a benchmark walked more than one."""
+    if len(bench["variants"]) < 2:
+        return []
+    return [
+        f"{v['robot']} {v['gait']}: {v['successes']}/{v['runs']} ({v['success_rate']:.0%}), "
+        f"{v['falls']} falls, {v['invalid_footholds']} invalid footholds"
+        for v in bench["variants"]
+    ]

@@ -8,11 +8,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from footfall.recording.session import Recorders
-from footfall.reports.walk import WalkReport, WalkRequest, prepare_walk
+from footfall.reports.walk import WalkReport
 from footfall.runtime.bus import InProcessBus
 from footfall.runtime.scheduler import stop_on_signals
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
 from footfall.sim.robot import OUTGOING, RobotSettings, run_robot
+from footfall.sim.walk_request import WalkRequest, prepare_walk
 
 
 @dataclass(frozen=True)
