@@ -19,7 +19,13 @@ from collections.abc import Callable, Sequence
 
 from footfall.benchmarking import run_parallel
 from footfall.errors import ConfigError
-from footfall.reliability.variants import Variant, parse_variants, variant_rates, walk_variant
+from footfall.reliability.variants import (
+    Variant,
+    parse_variants,
+    tally,
+    variant_rates,
+    walk_variant,
+)
 from footfall.runtime.fault_spec import FaultSpec
 
 # The fault classes and the strength each is walked with.
@@ -236,14 +242,7 @@ def _row(key: tuple, runs: Sequence[dict], seed_range: range) -> dict[str, objec
         "fault": label,
         "spec": spec,
         "terrain": terrain,
-        "runs": len(runs),
-        "successes": sum(bool(r["success"]) for r in runs),
-        "falls": sum(bool(r["fell"]) for r in runs),
-        "invalid_footholds": sum(int(r["invalid_footholds"]) for r in runs),
-        "frozen": sum(bool(r["frozen"]) for r in runs),
+        **tally(runs, seed_range),
         "recovered": sum(bool(r["recovered"]) for r in runs),
-        "failed_seeds": [
-            seed for seed, r in zip(seed_range, runs, strict=True) if not r["success"]
-        ],
         "wall_seconds": float(sum(float(r["wall_seconds"]) for r in runs)),
     }

@@ -14,7 +14,13 @@ import numpy as np
 
 from footfall.benchmarking import run_parallel
 from footfall.errors import ConfigError
-from footfall.reliability.variants import Variant, parse_variants, variant_rates, walk_variant
+from footfall.reliability.variants import (
+    Variant,
+    parse_variants,
+    tally,
+    variant_rates,
+    walk_variant,
+)
 
 # The modes: the full loop with route planning, the same on the straight line (the
 # thesis' behaviour), and the blind baseline.
@@ -192,19 +198,12 @@ def run_terrain_benchmark(
                 "difficulty": difficulty,
                 "value": value,
                 "mode": mode,
-                "runs": len(outcomes),
-                "successes": sum(bool(o["success"]) for o in outcomes),
-                "falls": sum(bool(o["fell"]) for o in outcomes),
-                "invalid_footholds": sum(int(o["invalid_footholds"]) for o in outcomes),
-                "frozen": sum(bool(o["frozen"]) for o in outcomes),
+                **tally(outcomes, seed_range),
                 "no_route": sum(bool(o["no_route"]) for o in outcomes),
                 "median_tilt_max_deg": float(np.median([o["tilt_max_deg"] for o in outcomes]))
                 if outcomes
                 else float("nan"),
                 "reasons": sorted({str(o["reason"]) for o in outcomes if o["reason"]}),
-                "failed_seeds": [
-                    seed for seed, o in zip(seed_range, outcomes, strict=True) if not o["success"]
-                ],
                 "wall_seconds": float(sum(o["wall_seconds"] for o in outcomes)),
             }
         )

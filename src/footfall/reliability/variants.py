@@ -130,3 +130,20 @@ def variant_lines(bench: dict) -> list[str]:
         f"{v['falls']} falls, {v['invalid_footholds']} invalid footholds"
         for v in bench["variants"]
     ]
+
+
+def tally(outcomes: Sequence[dict], seeds: Sequence[int]) -> dict[str, object]:
+    """What a results row counts over its walks, one walk per seed.
+
+    Returns:
+        ``runs``, ``successes``, ``falls``, ``invalid_footholds``, ``frozen`` and the
+        ``failed_seeds``.
+    """
+    return {
+        "runs": len(outcomes),
+        "successes": sum(bool(o["success"]) for o in outcomes),
+        "falls": sum(bool(o["fell"]) for o in outcomes),
+        "invalid_footholds": sum(int(o["invalid_footholds"]) for o in outcomes),
+        "frozen": sum(bool(o["frozen"]) for o in outcomes),
+        "failed_seeds": [s for s, o in zip(seeds, outcomes, strict=True) if not o["success"]],
+    }
