@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import statistics
 from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 from footfall.benchmarking import run_parallel
 from footfall.errors import ConfigError
@@ -27,6 +28,9 @@ from footfall.reliability.variants import (
     walk_variant,
 )
 from footfall.runtime.fault_spec import FaultSpec
+
+if TYPE_CHECKING:
+    from footfall.sim.walk_settings import WalkResult
 
 # The fault classes and the strength each is walked with.
 FAULT_CLASSES: tuple[tuple[str, str], ...] = (
@@ -56,12 +60,8 @@ def faulty_walk(
     seed: int = 0,
     seconds: float = 90.0,
     variant: Variant = DEFAULT_VARIANT,
-):
-    """The planned robot walking ``terrain`` to its goal with the faults ``spec``.
-
-    Returns:
-        The :class:`~footfall.sim.walk.WalkResult`.
-    """
+) -> WalkResult:
+    """The planned robot walking ``terrain`` to its goal with the faults ``spec``."""
     return walk_variant(variant, terrain, seed, seconds, faults=spec)
 
 

@@ -9,9 +9,12 @@ gait's default speed (0.1 m/s, or 3/4 of the gait's top speed where that is less
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 from footfall.errors import ConfigError
+
+if TYPE_CHECKING:
+    from footfall.sim.walk_settings import WalkResult
 
 DEFAULT_ROBOTS = ("default",)
 DEFAULT_GAITS = ("tripod",)
@@ -65,12 +68,8 @@ def walk_variant(
     blind: bool = False,
     straight: bool = False,
     faults: str = "",
-):
-    """The robot walking its gait across ``terrain`` to the goal, as ``footfall walk`` does.
-
-    Returns:
-        The :class:`~footfall.sim.walk_settings.WalkResult`.
-    """
+) -> WalkResult:
+    """The robot walking its gait across ``terrain`` to the goal, as ``footfall walk`` does."""
     from footfall.sim.walk import simulate_walk
     from footfall.sim.walk_request import WalkRequest, prepare_walk
 
@@ -90,7 +89,9 @@ def walk_variant(
     return simulate_walk(job.spec, job.settings, terrain=job.terrain)
 
 
-def variant_rates(rows: Sequence[dict], variants: Sequence[Variant], modes: Sequence[str]):
+def variant_rates(
+    rows: Sequence[dict], variants: Sequence[Variant], modes: Sequence[str]
+) -> list[dict[str, object]]:
     """Success rate per robot and gait (and per mode, where rows have one).
 
     Returns:
