@@ -6,18 +6,14 @@ against a plain-NumPy baseline in the same run (the :mod:`footfall.mapping.refer
 is synthetic and deterministic: a 640 x 480 camera 0.3 m above a floor scattered with
 boxes, looking ahead and down.
 
-The walking benchmarks (:mod:`footfall.reliability`) run their walks through
-:func:`run_parallel`, one process a walk.
+The walking benchmarks are in :mod:`footfall.reliability`.
 """
 
 from __future__ import annotations
 
-import multiprocessing
 import statistics
 import time
-from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from typing import TypeVar
+from collections.abc import Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -30,9 +26,6 @@ from footfall.scoring.reference import score_grid_numpy
 from footfall.scoring.walkability import ScoreConfig, score_heights
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
-
-T = TypeVar("T")
-R = TypeVar("R")
 
 
 def median_ms(fn: Callable[[], object], repeats: int) -> float:
@@ -133,27 +126,3 @@ def run_mapping_benchmark(repeats: int = 30, seed: int = 0) -> dict[str, float]:
         "score_speedup": baseline_score_ms / score_ms,
         "map_cells": config.size**2,
     }
-
-
-def run_parallel(
-    function: Callable[[T], R], jobs: Sequence[T], workers: int, on_done: Callable[[T], None]
-) -> dict[T, R]:
-    """``function`` of every job, in ``workers`` processes (in this one for a single worker).
-
-    ``on_done`` is called with each job as it finishes (in completion order).
-    """
-    results: dict[T, R] = {}
-    if workers <= 1:
-        for job in jobs:
-            results[job] = function(job)
-            on_done(job)
-        return results
-    # Spawned, not forked: a fork of a process holding rendering contexts and thread pools
-    # can deadlock.
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        futures = {pool.submit(function, job): job for job in jobs}
-        for future in as_completed(futures):
-            results[futures[future]] = future.result()
-            on_done(futures[future])
-    return results

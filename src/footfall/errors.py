@@ -52,3 +52,7 @@ class MessageError(FootfallError, ValueError):
 
 class BackendError(FootfallError, RuntimeError):
     """The robot cannot go on: a servo stopped answering, overheated or is overloaded."""
+
+
+class ClusterError(FootfallError, RuntimeError):
+    """A cluster cannot run the walks: no cluster at its address, or a walk lost too often."""

@@ -278,13 +278,13 @@ def _difficulty_unit(terrain: str) -> str:
 def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
     """Success rate against difficulty for each mode, one panel a terrain.
 
-    Where the benchmark walked several robots or gaits, each has its colour and each mode
-    its line style.
+    Where the benchmark walked several variants (robots, gaits, settings), each has its
+    colour and each mode its line style.
     """
     rows = bench["results"]
     terrains = list(dict.fromkeys(r["terrain"] for r in rows))
     modes = list(dict.fromkeys(r["mode"] for r in rows))
-    variants = list(dict.fromkeys((r["robot"], r["gait"]) for r in rows))
+    variants = list(dict.fromkeys(r["variant"] for r in rows))
     lines_of = [(v, m) for v in variants for m in modes]
     several = len(variants) > 1
     columns = min(len(terrains), 4)
@@ -300,10 +300,10 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
         sel_all = [r for r in rows if r["terrain"] == terrain]
         single = len({r["value"] for r in sel_all}) == 1
         for k, (variant, mode) in enumerate(lines_of):
-            sel = [r for r in sel_all if r["mode"] == mode and (r["robot"], r["gait"]) == variant]
+            sel = [r for r in sel_all if r["mode"] == mode and r["variant"] == variant]
             y = [r["successes"] / max(r["runs"], 1) for r in sel]
             falls = sum(r["falls"] for r in sel)
-            name = f"{variant[0]} {variant[1]} {mode}" if several else mode
+            name = f"{variant} {mode}" if several else mode
             label = f"{name} ({falls} falls)" if falls else name
             color = f"C{variants.index(variant) if several else k}"
             if single:  # one layout: a bar per line
@@ -314,7 +314,7 @@ def plot_terrain_benchmark(bench: dict, path: Path) -> Path:
                 )
         ax.set_title(terrain)
         if single:
-            names = [f"{v[0]} {v[1]} {m}" if several else m for v, m in lines_of]
+            names = [f"{v} {m}" if several else m for v, m in lines_of]
             ax.set_xticks(range(len(lines_of)), names, rotation=60 if several else 0, fontsize=7)
             value = sel_all[0]["value"]
             ax.set_xlabel("(single layout)" if difficulty == "none" else f"{difficulty} {value:g}")

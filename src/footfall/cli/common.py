@@ -1,4 +1,4 @@
-"""What the subcommands share: progress bars, metric tables, point-cloud options."""
+"""What the subcommands share: progress bars, metric tables, name lists, point-cloud options."""
 
 from __future__ import annotations
 
@@ -21,6 +21,23 @@ def sim_progress(console: Console) -> Progress:
         console=console,
         transient=True,
     )
+
+
+def count_progress(console: Console, unit: str = "") -> Progress:
+    """A progress bar with a label, counting ``unit`` (or only the time left)."""
+    count = [TextColumn(f"{{task.completed}}/{{task.total}} {unit}")] if unit else []
+    return Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        *count,
+        TimeRemainingColumn(),
+        console=console,
+    )
+
+
+def comma_list(text: str) -> list[str]:
+    """``A,B,...`` as names, blanks dropped."""
+    return [t.strip() for t in text.split(",") if t.strip()]
 
 
 def format_value(value: object, fmt: str | None = None) -> str:

@@ -180,6 +180,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="KIND:ID@SECONDS",
         help="with --servo-bus: a servo fault (silent, overheat, checksum, port); repeatable",
     )
+    p.add_argument(
+        "--set",
+        action="append",
+        dest="sets",
+        metavar="NAME=VALUE",
+        help="set a field of the robot, gait, scoring, mapping, planner, navigation or "
+        "feedback configuration by its name, e.g. scoring.threshold=0.4 (repeatable; units "
+        "SI, tuples as A:B)",
+    )
     add_recording_options(p)
     p.add_argument("--out", type=Path, default=Path("footfall-out/walk"), help="output folder")
     p.set_defaults(handler=run)
@@ -188,6 +197,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     """Walk, write the outputs, print the summary."""
     from footfall.reports.walk import run_walk
+    from footfall.sim.overrides import walk_settings
     from footfall.sim.walk_request import WalkRequest, prepare_walk
 
     backend, options = "sim", {}
@@ -225,6 +235,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
             faults=args.faults,
             backend=backend,
             backend_options=options,
+            overrides=walk_settings(args.sets),
         )
     )
     if args.blind:

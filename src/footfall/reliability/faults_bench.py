@@ -18,13 +18,14 @@ import statistics
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
-from footfall.benchmarking import run_parallel
 from footfall.errors import ConfigError
+from footfall.reliability.parallel import open_workers
 from footfall.reliability.variants import (
     Variant,
     parse_variants,
     tally,
     variant_rates,
+    variant_row,
     walk_variant,
 )
 from footfall.runtime.fault_spec import FaultSpec
@@ -49,8 +50,8 @@ FAULT_TERRAINS = ("stairs", "cobblestones", "course")
 RMSE_TERRAINS = ("cobblestones", "course")
 RMSE_SECONDS = 20.0
 
-# (robot, gait, fault label, fault spec, terrain, seed, seconds)
-Job = tuple[str, str, str, str, str, int, float]
+# (robot, gait, settings, fault label, fault spec, terrain, seed, seconds)
+Job = tuple[str, str, tuple, str, str, str, int, float]
 DEFAULT_VARIANT = Variant("default", "tripod")
 
 
@@ -69,8 +70,8 @@ def _walk(job: Job) -> dict[str, object]:
     """One walk of the benchmark."""
     from footfall.sim.walk_metrics import WalkMetrics
 
-    robot, gait, _, spec, terrain, seed, seconds = job
-    m = faulty_walk(terrain, spec, seed, seconds, Variant(robot, gait)).metrics
+    robot, gait, overrides, _, spec, terrain, seed, seconds = job
+    m = faulty_walk(terrain, spec, seed, seconds, Variant(robot, gait, overrides)).metrics
     assert isinstance(m, WalkMetrics)  # a simulated walk always walks
     r = m.robustness
     stopped = r.freezes + r.stale_stops
@@ -134,40 +135,45 @@ def run_fault_benchmark(
     first_seed: int = 0,
     robots: Sequence[str] | None = None,
     gaits: Sequence[str] | None = None,
+    cluster: str | None = None,
+    sets: Sequence[str] | None = None,
 ) -> dict[str, object]:
     """Walk every fault class on every terrain ``seeds`` times, and survey the map error.
 
     Each survey walks ``survey_seconds`` under SLAM noise, without and with compensation.
     The seeds are ``first_seed`` to ``first_seed + seeds - 1``. Every robot in ``robots``
-    walks every gait in ``gaits`` (the default robot's tripod by default); each robot is
-    surveyed.
+    walks every gait in ``gaits`` (the default robot's tripod by default) with every
+    combination of the ``sets`` (``NAME=V1,V2,...``, :mod:`footfall.sim.overrides`); each
+    robot is surveyed (as configured). The walks run in ``jobs`` processes, or as tasks on
+    the Ray ``cluster`` at that address (:func:`footfall.reliability.parallel.open_workers`).
 
     Returns:
-        ``results`` rows (``robot``, ``gait``, ``fault``, ``spec``, ``terrain``, ``runs``,
-        ``successes``, ``falls``, ``invalid_footholds``, ``frozen``, ``recovered``,
-        ``failed_seeds``, ``wall_seconds``), totals ``falls``, ``invalid_footholds`` and
-        ``success_rate``, the same per robot and gait (``variants``), and ``map_rmse`` with
-        the surveys' mean height RMSE without and with drift compensation.
+        ``results`` rows (``robot``, ``gait``, ``settings``, ``fault``, ``spec``,
+        ``terrain``, ``runs``, ``successes``, ``falls``, ``invalid_footholds``, ``frozen``,
+        ``recovered``, ``failed_seeds``, ``wall_seconds``), totals ``falls``,
+        ``invalid_footholds`` and ``success_rate``, the same per robot, gait and settings
+        (``variants``), and ``map_rmse`` with the surveys' mean height RMSE without and with
+        drift compensation.
     """
     if seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {seeds}")
-    if jobs < 1:
-        raise ConfigError(f"--jobs must be at least 1, got {jobs}")
     from footfall.sim.terrains import TERRAINS
 
     for terrain in terrains:
         TERRAINS.check(terrain)  # an unknown name is an error that lists the known ones
     for _, spec in faults:
         FaultSpec.parse(spec)
-    variants = parse_variants(robots, gaits)
+    variants = parse_variants(robots, gaits, sets)
     surveyed = list(dict.fromkeys(v.robot for v in variants))
 
     def progress(job: object) -> None:
         if on_run is not None:
             assert isinstance(job, tuple)
-            # A walk: robot, gait, fault, spec, terrain, seed; a survey: robot, terrain, seed.
-            shown = job[2:6] if len(job) == 7 else job[1:4]
-            who = job[:2] if len(job) == 7 else job[:1]
+            # A walk: robot, gait, settings, fault, spec, terrain, seed; a survey: robot,
+            # terrain, seed.
+            walk = len(job) == 8
+            shown = job[3:7] if walk else job[1:4]
+            who = (Variant(*job[:3]).label,) if walk else job[:1]
             parts = (*who, *shown) if len(variants) > 1 else shown
             on_run(" ".join(str(part) for part in parts))
 
@@ -188,8 +194,9 @@ def run_fault_benchmark(
         for seed in seed_range
         for compensate in (False, True)
     ]
-    outcomes = run_parallel(_walk, walks, jobs, progress)
-    errors = run_parallel(_map_error, surveys, jobs, progress)
+    with open_workers(jobs, cluster) as workers:
+        outcomes = workers.run(_walk, walks, progress)
+        errors = workers.run(_map_error, surveys, progress)
     rows = []
     for variant in variants:
         for label, spec in faults:
@@ -214,6 +221,7 @@ def run_fault_benchmark(
         "seconds": seconds,
         "robots": surveyed,
         "gaits": list(dict.fromkeys(v.gait for v in variants)),
+        "settings": sorted({name for v in variants for name, _ in v.overrides}),
         "results": rows,
         "variants": variant_rates(rows, variants, ()),
         "falls": sum(r["falls"] for r in rows),
@@ -235,10 +243,9 @@ def run_fault_benchmark(
 
 def _row(key: tuple, runs: Sequence[dict], seed_range: range) -> dict[str, object]:
     """One ``results`` row: a robot, gait, fault and terrain over the seeds."""
-    robot, gait, label, spec, terrain = key
+    robot, gait, overrides, label, spec, terrain = key
     return {
-        "robot": robot,
-        "gait": gait,
+        **variant_row(Variant(robot, gait, overrides)),
         "fault": label,
         "spec": spec,
         "terrain": terrain,

@@ -12,16 +12,16 @@ from footfall.plots import plt, save_figure
 def plot_fault_benchmark(bench: dict, path: Path) -> Path:
     """Success rate of every fault class on every terrain, with falls and invalid footholds.
 
-    Left, a fault x terrain grid (a line per robot, gait and fault where the benchmark
-    walked several robots or gaits) coloured by success rate, each cell labelled
+    Left, a fault x terrain grid (a line per variant and fault where the benchmark walked
+    several robots, gaits or settings) coloured by success rate, each cell labelled
     ``successes/runs`` (and ``F`` falls, ``I`` invalid footholds when any); right, the map's
     height RMSE under SLAM noise without and with drift compensation.
     """
     rows = bench["results"]
-    several = len({(r.get("robot"), r.get("gait")) for r in rows}) > 1
+    several = len({r["variant"] for r in rows}) > 1
 
     def line(r: dict) -> str:
-        return f"{r['robot']} {r['gait']} {r['fault']}" if several else r["fault"]
+        return f"{r['variant']} {r['fault']}" if several else r["fault"]
 
     faults = list(dict.fromkeys(line(r) for r in rows))
     terrains = list(dict.fromkeys(r["terrain"] for r in rows))

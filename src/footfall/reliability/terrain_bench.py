@@ -12,13 +12,14 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from footfall.benchmarking import run_parallel
 from footfall.errors import ConfigError
+from footfall.reliability.parallel import open_workers
 from footfall.reliability.variants import (
     Variant,
     parse_variants,
     tally,
     variant_rates,
+    variant_row,
     walk_variant,
 )
 
@@ -26,8 +27,8 @@ from footfall.reliability.variants import (
 # thesis' behaviour), and the blind baseline.
 TERRAIN_MODES = ("planned", "straight", "blind")
 
-# (robot, gait, terrain, swept parameter, value, mode, seed, seconds)
-Job = tuple[str, str, str, str, float, str, int, float]
+# (robot, gait, settings, terrain, swept parameter, value, mode, seed, seconds)
+Job = tuple[str, str, tuple, str, str, float, str, int, float]
 
 
 def terrain_sweep(
@@ -85,9 +86,9 @@ def _terrain_run(job: Job) -> dict[str, object]:
     from footfall.sim.terrains import TERRAINS
     from footfall.sim.walk_metrics import WalkMetrics
 
-    robot, gait, name, difficulty, value, mode, seed, seconds = job
+    robot, gait, overrides, name, difficulty, value, mode, seed, seconds = job
     result = walk_variant(
-        Variant(robot, gait),
+        Variant(robot, gait, overrides),
         name,
         seed,
         seconds,
@@ -122,10 +123,25 @@ def _terrain_run(job: Job) -> dict[str, object]:
         "no_route": no_route,
         "reason": reason,
         "tilt_max_deg": m.gait.tilt_max_deg,
+        "mean_speed_mps": m.gait.mean_speed_mps,
+        "stance_slip_max_m": m.gait.stance_slip_max_m,
         "sim_seconds": m.gait.sim_seconds,
         "wall_seconds": m.gait.wall_seconds,
         "replan_ms_median": replan_ms(navigation and navigation.replan_ms_median),
         "replan_ms_p95": replan_ms(navigation and navigation.replan_ms_p95),
+    }
+
+
+def _walking_medians(outcomes: Sequence[dict]) -> dict[str, float]:
+    """Medians over walks: the largest tilt, the mean speed and the largest stance slip."""
+
+    def median(key: str) -> float:
+        return float(np.median([o[key] for o in outcomes])) if outcomes else float("nan")
+
+    return {
+        "median_tilt_max_deg": median("tilt_max_deg"),
+        "median_speed_mps": median("mean_speed_mps"),
+        "median_stance_slip_max_m": median("stance_slip_max_m"),
     }
 
 
@@ -139,6 +155,8 @@ def run_terrain_benchmark(
     modes: Sequence[str] | None = None,
     robots: Sequence[str] | None = None,
     gaits: Sequence[str] | None = None,
+    cluster: str | None = None,
+    sets: Sequence[str] | None = None,
 ) -> dict[str, object]:
     """The terrain sweep in every mode (or ``modes``), ``seeds`` runs per configuration.
 
@@ -156,16 +174,21 @@ def run_terrain_benchmark(
             no success rate.
         robots: Robots to walk (built-in names or TOML files; the default robot by default).
         gaits: Gaits each robot walks (tripod by default).
+        sets: ``NAME=V1,V2,...`` settings (:mod:`footfall.sim.overrides`): the sweep is
+            walked with every combination of their values.
+        cluster: A Ray cluster's address (or ``"auto"``) to walk on instead of this
+            machine's ``jobs`` processes (:func:`footfall.reliability.parallel.open_workers`).
 
     Returns:
-        Per configuration (``results``: robot, gait, terrain, difficulty, value, mode):
-        runs, successes, falls, invalid footholds, frozen runs, runs without a route,
-        median tilt, the reasons given, the failed seeds, wall time; overall
-        ``planned_success_rate``, ``straight_success_rate`` and ``blind_success_rate``;
-        the same per robot and gait (``variants``); and the route planner's replan times
-        over the planned runs.
+        Per configuration (``results``: robot, gait, settings, terrain, difficulty, value,
+        mode): runs, successes, falls, invalid footholds, frozen runs, runs without a route,
+        the medians of the largest tilt, the speed and the largest stance slip, the reasons
+        given, the failed seeds, wall time; overall ``planned_success_rate``,
+        ``straight_success_rate`` and ``blind_success_rate``; the same, with the walking
+        medians, per robot, gait and settings (``variants``); the names set (``settings``);
+        and the route planner's replan times over the planned runs.
     """
-    variants = parse_variants(robots, gaits)
+    variants = parse_variants(robots, gaits, sets)
     sweep = terrain_sweep(terrains)
     chosen = terrain_modes(modes)
     configs = [
@@ -181,28 +204,26 @@ def run_terrain_benchmark(
 
     def done(job: Job) -> None:
         if on_run is not None:
-            robot, gait, name, difficulty, value, mode, seed, _ = job
-            who = f"{robot} {gait} " if several else ""
+            robot, gait, overrides, name, difficulty, value, mode, seed, _ = job
+            who = f"{Variant(robot, gait, overrides).label} " if several else ""
             on_run(f"{who}{name} {difficulty}={value:g} {mode} seed {seed}")
 
-    runs = run_parallel(_terrain_run, work, jobs, done)
+    with open_workers(jobs, cluster) as workers:
+        runs = workers.run(_terrain_run, work, done)
     rows = []
     for config in configs:
         outcomes = [runs[(*config, seed, seconds)] for seed in seed_range]
-        robot, gait, name, difficulty, value, mode = config
+        robot, gait, overrides, name, difficulty, value, mode = config
         rows.append(
             {
-                "robot": robot,
-                "gait": gait,
+                **variant_row(Variant(robot, gait, overrides)),
                 "terrain": name,
                 "difficulty": difficulty,
                 "value": value,
                 "mode": mode,
                 **tally(outcomes, seed_range),
                 "no_route": sum(bool(o["no_route"]) for o in outcomes),
-                "median_tilt_max_deg": float(np.median([o["tilt_max_deg"] for o in outcomes]))
-                if outcomes
-                else float("nan"),
+                **_walking_medians(outcomes),
                 "reasons": sorted({str(o["reason"]) for o in outcomes if o["reason"]}),
                 "wall_seconds": float(sum(o["wall_seconds"] for o in outcomes)),
             }
@@ -215,7 +236,7 @@ def run_terrain_benchmark(
             return float("nan")
         return sum(r["successes"] for r in mine) / runs_of_mode
 
-    planned = [runs[job] for job in work if job[5] == "planned"]
+    planned = [runs[job] for job in work if job[6] == "planned"]  # the job's mode
     medians = [o["replan_ms_median"] for o in planned if np.isfinite(o["replan_ms_median"])]
     p95s = [o["replan_ms_p95"] for o in planned if np.isfinite(o["replan_ms_p95"])]
     return {
@@ -226,7 +247,11 @@ def run_terrain_benchmark(
         "terrains": [name for name, _, _ in sweep],
         "modes": list(chosen),
         "results": rows,
-        "variants": variant_rates(rows, variants, chosen),
+        "settings": sorted({name for v in variants for name, _ in v.overrides}),
+        "variants": [
+            {**rates, **_walking_medians([runs[job] for job in work if Variant(*job[:3]) == v])}
+            for v, rates in zip(variants, variant_rates(rows, variants, chosen), strict=True)
+        ],
         "planned_success_rate": rate("planned"),
         "straight_success_rate": rate("straight"),
         "blind_success_rate": rate("blind"),

@@ -1,9 +1,11 @@
-"""The robots and gaits a benchmark walks: each (robot, gait) pair is a row dimension.
+"""The robots, gaits and settings a benchmark walks: each variant is a row dimension.
 
-``footfall bench terrain`` and ``bench faults`` take ``--robot`` and ``--gait`` lists; every
-pair walks the whole suite, and each walk is set up the way ``footfall walk`` sets it up
-(:func:`footfall.sim.walk_request.prepare_walk`): the robot's nominal height and stride, the
-gait's default speed (0.1 m/s, or 3/4 of the gait's top speed where that is less).
+``footfall bench terrain`` and ``bench faults`` take ``--robot`` and ``--gait`` lists and
+``--set NAME=V1,V2,...`` options (:mod:`footfall.sim.overrides`); every robot walks every gait
+with every combination of the settings over the whole suite, and each walk is set up the way
+``footfall walk`` sets it up (:func:`footfall.sim.walk_request.prepare_walk`): the robot's
+nominal height and stride, the gait's default speed (0.1 m/s, or 3/4 of the gait's top speed
+where that is less).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, NamedTuple
 
 from footfall.errors import ConfigError
+from footfall.sim.overrides import Setting, combinations, settings_json
 
 if TYPE_CHECKING:
     from footfall.sim.walk_settings import WalkResult
@@ -21,28 +24,43 @@ DEFAULT_GAITS = ("tripod",)
 
 
 class Variant(NamedTuple):
-    """One robot walking one gait.
+    """One robot walking one gait with one combination of settings.
 
     Attributes:
         robot: A built-in robot's name or a robot description TOML file.
         gait: A gait's name (``footfall.motion.gait.GAITS``).
+        overrides: Configuration fields set by name, as ``(name, value)`` pairs.
     """
 
     robot: str
     gait: str
+    overrides: tuple[Setting, ...] = ()
+
+    @property
+    def label(self) -> str:
+        """The robot, gait and settings in a line: ``default tripod scoring.threshold=0.4``."""
+        shown = " ".join(f"{name}={value}" for name, value in settings_json(self.overrides).items())
+        return " ".join(filter(None, (self.robot, self.gait, shown)))
 
 
 def parse_variants(
-    robots: Sequence[str] | None = None, gaits: Sequence[str] | None = None
+    robots: Sequence[str] | None = None,
+    gaits: Sequence[str] | None = None,
+    sets: Sequence[str] | None = None,
 ) -> tuple[Variant, ...]:
-    """Every robot with every gait, robots outermost; each checked now.
+    """Every robot with every gait and every combination of ``sets``; each checked now.
+
+    Robots are outermost, then gaits, then the settings (the first ``--set`` outermost).
+    Every variant is set up as a walk before anything walks, so a setting the robot or the
+    walk refuses fails here.
 
     Raises:
-        ConfigError: An empty list, a name given twice, an unknown gait or a robot that
-            does not load (the error names it).
+        ConfigError: An empty list, a name given twice, an unknown gait, a robot that
+            does not load, an unknown setting or a value it refuses (the error names it).
     """
     from footfall.motion.gait import GAITS
     from footfall.robot.spec import load_spec
+    from footfall.sim.walk_request import WalkRequest, prepare_walk
 
     robots = DEFAULT_ROBOTS if robots is None else tuple(robots)
     gaits = DEFAULT_GAITS if gaits is None else tuple(gaits)
@@ -56,7 +74,21 @@ def parse_variants(
         GAITS.check(gait)
     for robot in robots:
         load_spec(robot)
-    return tuple(Variant(robot, gait) for robot in robots for gait in gaits)
+    studied = combinations(sets)
+    variants = tuple(
+        Variant(robot, gait, chosen) for robot in robots for gait in gaits for chosen in studied
+    )
+    if sets:
+        for variant in variants:
+            prepare_walk(
+                WalkRequest(
+                    terrain="flat",
+                    robot=variant.robot,
+                    gait=variant.gait,
+                    overrides=variant.overrides,
+                )
+            )
+    return variants
 
 
 def walk_variant(
@@ -92,20 +124,19 @@ def walk_variant(
 def variant_rates(
     rows: Sequence[dict], variants: Sequence[Variant], modes: Sequence[str]
 ) -> list[dict[str, object]]:
-    """Success rate per robot and gait (and per mode, where rows have one).
+    """Success rate per robot, gait and settings (and per mode, where rows have one).
 
     Returns:
-        One dict per variant: ``robot``, ``gait``, ``runs``, ``successes``, ``falls``,
-        ``invalid_footholds`` and ``success_rate``, and ``{mode}_success_rate`` for each
-        of ``modes``.
+        One dict per variant: ``robot``, ``gait``, ``settings``, ``runs``, ``successes``,
+        ``falls``, ``invalid_footholds`` and ``success_rate``, and ``{mode}_success_rate``
+        for each of ``modes``.
     """
     out = []
-    for robot, gait in variants:
-        mine = [r for r in rows if r["robot"] == robot and r["gait"] == gait]
+    for variant in variants:
+        mine = [r for r in rows if r["variant"] == variant.label]
         runs = sum(r["runs"] for r in mine)
         entry: dict[str, object] = {
-            "robot": robot,
-            "gait": gait,
+            **variant_row(variant),
             "runs": runs,
             "successes": sum(r["successes"] for r in mine),
             "falls": sum(r["falls"] for r in mine),
@@ -123,14 +154,27 @@ def variant_rates(
 
 
 def variant_lines(bench: dict) -> list[str]:
-    """Each robot and gait's success as a line, where a benchmark walked more than one."""
+    """Each variant's success as a line, where a benchmark walked more than one."""
     if len(bench["variants"]) < 2:
         return []
     return [
-        f"{v['robot']} {v['gait']}: {v['successes']}/{v['runs']} ({v['success_rate']:.0%}), "
+        f"{v['variant']}: {v['successes']}/{v['runs']} ({v['success_rate']:.0%}), "
         f"{v['falls']} falls, {v['invalid_footholds']} invalid footholds"
         for v in bench["variants"]
     ]
+
+
+def variant_row(variant: Variant) -> dict[str, object]:
+    """A ``results`` row's variant: ``robot``, ``gait``, ``settings`` and ``variant``.
+
+    ``variant`` is the three in a line, as charts and tables name it.
+    """
+    return {
+        "robot": variant.robot,
+        "gait": variant.gait,
+        "settings": settings_json(variant.overrides),
+        "variant": variant.label,
+    }
 
 
 def tally(outcomes: Sequence[dict], seeds: Sequence[int]) -> dict[str, object]:

@@ -68,14 +68,14 @@ def run_terrain_bench(
     modes: Sequence[str] | None = None,
     robots: Sequence[str] | None = None,
     gaits: Sequence[str] | None = None,
+    cluster: str | None = None,
+    sets: Sequence[str] | None = None,
 ) -> BenchReport:
     """Planned, straight and blind walking over the terrain sweep (``run_terrain_benchmark``)."""
     from footfall.reliability.terrain_bench import run_terrain_benchmark
 
     if seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {seeds}")
-    if jobs < 1:
-        raise ConfigError(f"--jobs must be at least 1, got {jobs}")
     return BenchReport(
         "terrain",
         run_terrain_benchmark(
@@ -88,6 +88,8 @@ def run_terrain_bench(
             modes=modes,
             robots=robots,
             gaits=gaits,
+            cluster=cluster,
+            sets=sets,
         ),
     )
 
@@ -103,6 +105,8 @@ def run_faults_bench(
     first_seed: int = 0,
     robots: Sequence[str] | None = None,
     gaits: Sequence[str] | None = None,
+    cluster: str | None = None,
+    sets: Sequence[str] | None = None,
 ) -> BenchReport:
     """Every fault class on every terrain (see ``run_fault_benchmark``)."""
     from footfall.reliability.faults_bench import (
@@ -122,6 +126,8 @@ def run_faults_bench(
         first_seed=first_seed,
         robots=robots,
         gaits=gaits,
+        cluster=cluster,
+        sets=sets,
     )
     return BenchReport("faults", figures)
 

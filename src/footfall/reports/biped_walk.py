@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
 from footfall.biped.maps import TEST_CASES
 from footfall.errors import ConfigError
+from footfall.reliability.parallel import open_workers
 from footfall.reports import write_json
 from footfall.sim.biped_run import BipedWalk, WalkBipedRequest, walk_biped
 
@@ -92,16 +92,12 @@ def run_biped_bench(
     if seeds < 0 or jobs < 1:
         raise ConfigError(f"--seeds must be >= 0 and --jobs >= 1, got {seeds}, {jobs}")
     work = [("case", n) for n in cases] + [("room", first_seed + k) for k in range(seeds)]
-    runs = []
-    if jobs == 1:
-        for job in work:
-            runs.append(_one(job))
-            if on_run:
-                on_run(f"{job[0]} {job[1]}")
-    else:
-        with ProcessPoolExecutor(jobs) as pool:
-            for job, row in zip(work, pool.map(_one, work), strict=True):
-                runs.append(row)
-                if on_run:
-                    on_run(f"{job[0]} {job[1]}")
+
+    def done(job: tuple[str, int]) -> None:
+        if on_run:
+            on_run(f"{job[0]} {job[1]}")
+
+    with open_workers(jobs) as workers:
+        rows = workers.run(_one, work, done)
+    runs = [rows[job] for job in work]
     return BipedBenchReport(runs, seeds)

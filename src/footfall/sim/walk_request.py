@@ -9,12 +9,14 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from footfall.errors import ConfigError
+from footfall.errors import ConfigError, UnreachableTargetError
 from footfall.messages import WalkCommand
 from footfall.motion.gait import GaitConfig
+from footfall.robot.kinematics import LegKinematics
 from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.runtime.fault_spec import FaultSpec
 from footfall.sim.model import CameraMount
+from footfall.sim.overrides import Setting, apply_settings, apply_walk_settings
 from footfall.sim.terrain import Terrain
 from footfall.sim.terrains import TERRAINS, difficulty_parameters, make_terrain
 from footfall.sim.walk_settings import WalkSettings
@@ -64,6 +66,8 @@ class WalkRequest:
         pose: The pose source (a name in ``POSES``).
         camera_options: Settings for the camera source.
         pose_options: Settings for the pose source.
+        overrides: Configuration fields set by name (``--set``, :mod:`footfall.sim.overrides`),
+            as ``(name, value)`` pairs.
     """
 
     terrain: str = "stairs"
@@ -94,6 +98,7 @@ class WalkRequest:
     pose: str = "sim"
     camera_options: dict[str, str] = field(default_factory=dict)
     pose_options: dict[str, str] = field(default_factory=dict)
+    overrides: tuple[Setting, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -134,15 +139,32 @@ def default_seconds(
     return max(MIN_DEFAULT_SECONDS, DEFAULT_TIME_MARGIN * distance / speed)
 
 
+def _check_stance(spec: HexapodSpec, height: float) -> None:
+    """That the robot can stand at ``height``: every foot at rest within reach and limits.
+
+    Raises:
+        ConfigError: Naming the robot, the height and the leg that cannot reach.
+    """
+    feet = spec.rest_feet_in_body(height)
+    feet[:, 2] += spec.foot_radius
+    try:
+        LegKinematics(spec).inverse_in_body(feet)
+    except UnreachableTargetError as exc:
+        raise ConfigError(
+            f"robot {spec.name!r} cannot stand at body height {height:g} m: {exc}"
+        ) from exc
+
+
 def prepare_walk(request: WalkRequest) -> WalkJob:
     """Resolve a request: the robot, the speed, the terrain and its parameters.
 
     Raises:
-        ConfigError: A speed above the gait's top speed, or a terrain parameter given for
-            another terrain.
+        ConfigError: A speed above the gait's top speed, a body height the robot cannot
+            stand at, or a terrain parameter given for another terrain.
     """
-    spec = load_spec(request.robot)
+    spec = apply_settings(load_spec(request.robot), "robot", request.overrides)
     gait = GaitConfig(kind=request.gait, swing=request.swing, stride_length=request.stride)
+    gait = apply_settings(gait, "gait", request.overrides)
     max_speed = gait.for_robot(spec.stride_length, spec.max_step_height).max_speed
     speed = min(DEFAULT_SPEED_MPS, 0.75 * max_speed) if request.speed is None else request.speed
     if speed > max_speed + 1e-12:
@@ -176,6 +198,7 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
     if seconds is None:
         seconds = default_seconds(terrain, speed, request.goal)
     height = spec.body_height if request.height is None else request.height
+    _check_stance(spec, height)
     width, image_height = request.image_size
     settings = WalkSettings(
         terrain=request.terrain,
@@ -198,4 +221,5 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
         camera_options=dict(request.camera_options),
         pose_options=dict(request.pose_options),
     )
+    settings = apply_walk_settings(settings, request.overrides)
     return WalkJob(request, spec, settings, terrain, params)
