@@ -117,7 +117,7 @@ def test_the_dataclass_checks_every_value():
     """A value of the right kind that the configuration refuses fails when applied, named."""
     with pytest.raises(ConfigError, match=r"scoring\.threshold=-1"):
         prepare_walk(WalkRequest(overrides=(("scoring.threshold", -1.0),)))
-    with pytest.raises(ConfigError, match="cannot stand at body height 0.5"):
+    with pytest.raises(ConfigError, match=r"cannot stand at body height 0\.5"):
         prepare_walk(WalkRequest(overrides=(("robot.body_height", 0.5),)))
 
 
