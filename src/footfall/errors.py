@@ -56,3 +56,7 @@ class BackendError(FootfallError, RuntimeError):
 
 class ClusterError(FootfallError, RuntimeError):
     """A cluster cannot run the walks: no cluster at its address, or a walk lost too often."""
+
+
+class CameraError(FootfallError, RuntimeError):
+    """The camera cannot go on: none connected, no depth stream, unplugged, a bad frame."""

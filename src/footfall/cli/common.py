@@ -40,6 +40,23 @@ def comma_list(text: str) -> list[str]:
     return [t.strip() for t in text.split(",") if t.strip()]
 
 
+def key_values(option: str, items: list[str]) -> dict[str, str]:
+    """``KEY=VALUE`` items of a repeatable option as a dict.
+
+    Raises:
+        ConfigError: An item without a key or an ``=``, naming the option.
+    """
+    from footfall.errors import ConfigError
+
+    options = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not key or not sep:
+            raise ConfigError(f"{option} {item!r}: use KEY=VALUE")
+        options[key] = value
+    return options
+
+
 def format_value(value: object, fmt: str | None = None) -> str:
     """A metric for a table: NaN as n/a, else with ``fmt`` (floats to 4 digits by default)."""
     if isinstance(value, float) and math.isnan(value):

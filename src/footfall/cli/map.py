@@ -12,6 +12,7 @@ from footfall.cli.common import (
     add_depth_camera_options,
     add_recording_options,
     format_value,
+    key_values,
     print_table,
     sim_progress,
     wrote,
@@ -78,15 +79,40 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="map this TUM-layout sequence instead of simulating; with --camera-height, also "
         "one depth PNG or a folder of them taken from that pose",
     )
+    p.add_argument(
+        "--realsense",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="map this RealSense recording (.bag or .db3, played by librealsense; needs "
+        "footfall[realsense]) with --trajectory, or from a fixed camera pose",
+    )
+    p.add_argument(
+        "--trajectory",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="the camera's poses for --realsense: TUM format (t tx ty tz qx qy qz qw, the "
+        "optical frame in the world, t on the recording's clock)",
+    )
+    p.add_argument(
+        "--realsense-option",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="librealsense's depth filters for --realsense: decimation=2, spatial=1, "
+        "temporal=1, hole_filling=1 (repeatable)",
+    )
     add_depth_camera_options(p, "with --tum")
-    add_camera_pose_options(p, "with --tum, for frames without a trajectory")
+    add_camera_pose_options(p, "with --tum or --realsense, for frames without a trajectory")
     p.add_argument(
         "--up",
         type=float,
         nargs=3,
         metavar=("X", "Y", "Z"),
         default=(0.0, 0.0, 1.0),
-        help="the recorded world's up axis (with --tum); TUM and Redwood worlds are not z-up",
+        help="the recorded world's up axis (with --tum or --trajectory); TUM and Redwood "
+        "worlds are not z-up",
     )
     p.add_argument(
         "--depth-scale", type=float, default=1.0 / 5000.0, help="metres per depth unit (with --tum)"
@@ -120,9 +146,12 @@ def run(args: argparse.Namespace, console: Console) -> int:
         record=args.record,
         rerun=args.rerun,
         rerun_spawn=args.rerun_spawn,
+        realsense=args.realsense,
+        trajectory=args.trajectory,
+        realsense_options=key_values("--realsense-option", args.realsense_option),
     )
-    if args.tum is not None:
-        console.print(f"Mapping recorded sequence {args.tum}")
+    if args.tum is not None or args.realsense is not None:
+        console.print(f"Mapping recorded sequence {args.tum or args.realsense}")
         report = run_map(request)
     else:
         width, height = args.image_size

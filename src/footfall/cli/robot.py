@@ -8,7 +8,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from footfall.cli.common import add_recording_options, wrote
+from footfall.cli.common import add_recording_options, key_values, wrote
 from footfall.errors import ConfigError
 
 
@@ -115,6 +115,19 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "(footfall servo-bus in a dry run, or your camera's process)",
     )
     hardware.add_argument("--port", help="the servo bus's serial port (overrides [hardware] port)")
+    hardware.add_argument(
+        "--realsense-file",
+        type=Path,
+        metavar="FILE",
+        help="the camera is this RealSense recording (.bag, .db3), played at its own pace "
+        "(--camera realsense; needs footfall[realsense])",
+    )
+    hardware.add_argument(
+        "--realsense-serial",
+        metavar="SERIAL",
+        help="the camera is the RealSense with this serial number (--camera realsense; the "
+        "only one connected when --camera realsense names none)",
+    )
     for kind, example in (("camera", "a device's serial number"), ("pose", "a map file")):
         p.add_argument(
             f"--{kind}-option",
@@ -177,16 +190,6 @@ def _rates(items: list[str]) -> dict[str, float | None]:
     return rates
 
 
-def _options(option: str, items: list[str]) -> dict[str, str]:
-    options = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not key or not sep:
-            raise ConfigError(f"{option} {item!r}: use KEY=VALUE")
-        options[key] = value
-    return options
-
-
 def run(args: argparse.Namespace, console: Console) -> int:
     """Run the robot until it is stopped; write its record."""
     from footfall.reports.robot import BipedRequest, RobotRequest, run_biped, run_robot_report
@@ -205,7 +208,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
         return 0
     if args.case is not None or args.map is not None or args.cloud is not None:
         raise ConfigError("--case, --map and --cloud go with --biped")
-    backend, backend_options = args.backend, _options("--backend-option", args.backend_option)
+    backend, backend_options = args.backend, key_values("--backend-option", args.backend_option)
     camera, pose, robot, terrain = args.camera or "sim", args.pose or "sim", "default", args.sim
     if args.hardware is not None:
         backend, robot, terrain = "dynamixel", str(args.hardware), "flat"
@@ -215,6 +218,20 @@ def run(args: argparse.Namespace, console: Console) -> int:
             backend_options["port"] = args.port
     elif args.port is not None:
         raise ConfigError("--port goes with --hardware")
+    camera_options = key_values("--camera-option", args.camera_option)
+    if args.realsense_file is not None or args.realsense_serial is not None:
+        if args.camera not in (None, "realsense"):
+            raise ConfigError("--realsense-file and --realsense-serial are the realsense camera")
+        if args.realsense_file is not None and args.realsense_serial is not None:
+            raise ConfigError("give --realsense-file or --realsense-serial, not both")
+        camera = "realsense"
+        if args.realsense_file is not None:
+            camera_options["file"] = str(args.realsense_file)
+        else:
+            camera_options["serial"] = args.realsense_serial
+    if camera == "realsense":
+        # The robot's TOML places the camera on the body ([camera]).
+        camera_options.setdefault("robot", robot)
     request = RobotRequest(
         walk=WalkRequest(
             terrain=terrain,
@@ -226,8 +243,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
             rerun_spawn=args.rerun_spawn,
             backend=backend,
             backend_options=backend_options,
-            camera_options=_options("--camera-option", args.camera_option),
-            pose_options=_options("--pose-option", args.pose_option),
+            camera_options=camera_options,
+            pose_options=key_values("--pose-option", args.pose_option),
             camera=None if camera == "none" else camera,
             pose=pose,
         ),

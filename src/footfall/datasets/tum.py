@@ -20,7 +20,6 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 from PIL import Image
-from scipy.spatial.transform import Rotation
 
 from footfall.datasets.floor import floor_flatness
 from footfall.errors import DatasetError
@@ -32,6 +31,7 @@ from footfall.runtime.bus import Bus, InProcessBus
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
+from footfall.sensing.trajectory import Trajectory, read_table, up_to_z
 
 TUM_DEPTH_SCALE = 1.0 / 5000.0  # metres per depth unit
 
@@ -53,27 +53,6 @@ class SequenceFrame:
     pose_time_offset: float
 
 
-def _read_table(path: Path, columns: int) -> list[list[str]]:
-    if not path.is_file():
-        raise DatasetError(f"missing {path.name} in {path.parent}")
-    rows = []
-    try:
-        text = path.read_text()
-    except UnicodeDecodeError as exc:
-        raise DatasetError(f"{path}: not a text file ({exc})") from exc
-    for number, line in enumerate(text.splitlines(), start=1):
-        line = line.strip()
-        if not line or line.startswith("#"):
-            continue
-        fields = line.split()
-        if len(fields) < columns:
-            raise DatasetError(
-                f"{path.name} line {number}: expected {columns} fields, got {len(fields)}"
-            )
-        rows.append(fields)
-    return rows
-
-
 def read_tum_sequence(
     folder: str | Path, max_time_difference: float = 0.02
 ) -> tuple[list[SequenceFrame], int]:
@@ -91,33 +70,21 @@ def read_tum_sequence(
         InvalidPoseError: A pose with a non-unit quaternion.
     """
     root = Path(folder)
-    depth_rows = _read_table(root / "depth.txt", 2)
-    pose_rows = _read_table(root / "groundtruth.txt", 8)
-    if not pose_rows:
-        raise DatasetError(f"{root / 'groundtruth.txt'} holds no poses")
+    depth_rows = read_table(root / "depth.txt", 2)
+    trajectory = Trajectory.read(root / "groundtruth.txt")
     try:
-        pose_table = np.array([[float(v) for v in row[:8]] for row in pose_rows])
         depth_times = [float(row[0]) for row in depth_rows]
     except ValueError as exc:
-        raise DatasetError(f"{root}: a timestamp or pose value is not a number ({exc})") from exc
-    order = np.argsort(pose_table[:, 0])
-    pose_table = pose_table[order]
-    times = pose_table[:, 0]
+        raise DatasetError(f"{root}: a timestamp is not a number ({exc})") from exc
     frames = []
     skipped = 0
     for t, row in sorted(zip(depth_times, depth_rows, strict=True), key=lambda item: item[0]):
-        k = int(np.searchsorted(times, t))
-        candidates = [c for c in (k - 1, k) if 0 <= c < len(times)]
-        best = min(candidates, key=lambda c: abs(times[c] - t))
-        if abs(times[best] - t) > max_time_difference:
+        found = trajectory.nearest(t, max_time_difference)
+        if found is None:
             skipped += 1
             continue
-        p = pose_table[best]
-        frames.append(
-            SequenceFrame(
-                t, root / row[1], Pose.from_quaternion(p[1:4], p[4:8]), float(times[best] - t)
-            )
-        )
+        pose, offset = found
+        frames.append(SequenceFrame(t, root / row[1], pose, offset))
     return frames, skipped
 
 
@@ -139,7 +106,7 @@ def read_fixed_view(path: str | Path, camera_pose: Pose, fps: float = 30.0) -> l
     if not p.is_dir():
         raise DatasetError(f"missing depth image or sequence {p}")
     if (p / "depth.txt").is_file():
-        rows = _read_table(p / "depth.txt", 2)
+        rows = read_table(p / "depth.txt", 2)
         try:
             stamped = sorted((float(r[0]), p / r[1]) for r in rows)
         except ValueError as exc:
@@ -204,16 +171,6 @@ def check_depth_units(depth: npt.NDArray, depth_scale: float, path: str | Path) 
             )
 
 
-def up_to_z(up: npt.ArrayLike) -> Rotation:
-    """The smallest rotation taking the world's up axis to +z."""
-    u = np.asarray(up, dtype=np.float64)
-    norm = np.linalg.norm(u)
-    if u.shape != (3,) or not norm > 0:
-        raise DatasetError(f"--up needs a non-zero 3-vector, got {up!r}")
-    rotation, _ = Rotation.align_vectors([[0.0, 0.0, 1.0]], [u / norm])
-    return rotation
-
-
 @dataclass(frozen=True)
 class SequenceMap:
     """A mapped sequence.
@@ -272,11 +229,7 @@ class TumSequenceSource:
         if camera_pose is not None:
             self.frames, self.skipped = read_fixed_view(folder, camera_pose), 0
             self.poses = [camera_pose for _ in self.frames]
-            forward = camera_pose.rotation.apply([0.0, 0.0, 1.0])
-            forward[2] = 0.0
-            norm = float(np.linalg.norm(forward))
-            ahead = forward / norm * look_ahead_m if norm > 1e-9 else np.zeros(3)
-            centre = Pose(camera_pose.position + ahead, camera_pose.rotation)
+            centre = fixed_view_centre(camera_pose, look_ahead_m)
             self.centres = [centre for _ in self.frames]
             return
         self.frames, self.skipped = read_tum_sequence(folder)
@@ -358,19 +311,51 @@ def map_tum_sequence(
     if on_mapping is not None:
         on_mapping(mapping)
     source.play()
-    mapping.publish(source.frames[-1].timestamp)
+    path = np.array([p.position[:2] for p in source.poses])
+    return finish_sequence_map(
+        mapping,
+        source.frames[-1].timestamp,
+        path,
+        {"frames_skipped_no_pose": source.skipped, "frames_implausible": source.frames_implausible},
+    )
+
+
+def finish_sequence_map(
+    mapping: MappingNode,
+    stamp: float,
+    camera_path_xy: npt.NDArray[np.float64],
+    counts: dict[str, int],
+) -> SequenceMap:
+    """The map of a played sequence: scored at ``stamp``, with its metrics.
+
+    Args:
+        mapping: The mapping node the sequence played into.
+        stamp: The last frame's time [s].
+        camera_path_xy: Camera positions, shape (n, 2) [m].
+        counts: The source's own counts; ``frames_skipped_no_pose`` adds the node's.
+    """
+    mapping.publish(stamp)
     snapshot = mapping.height_map.snapshot()
     scores = mapping.scores
     assert scores is not None
-    path = np.array([p.position[:2] for p in source.poses])
+    skipped = counts.get("frames_skipped_no_pose", 0) + mapping.frames_skipped_no_pose
     metrics: dict[str, object] = {
         "frames": mapping.frames,
-        "frames_skipped_no_pose": source.skipped + mapping.frames_skipped_no_pose,
-        "frames_implausible": source.frames_implausible,
+        **counts,
+        "frames_skipped_no_pose": skipped,
         **mapping.timing(),
         "cells_known": int(snapshot.known.sum()),
         "pixels_dropped": mapping.pixels_dropped,
         "points_outside_map": mapping.points_outside,
         **floor_flatness(snapshot, scores.valid, window_cells=mapping.score_config.kernel_size),
     }
-    return SequenceMap(snapshot, scores, path, metrics)
+    return SequenceMap(snapshot, scores, camera_path_xy, metrics)
+
+
+def fixed_view_centre(camera_pose: Pose, look_ahead_m: float = 2.0) -> Pose:
+    """Where a map follows a camera that does not move: ``look_ahead_m`` ahead of it, level."""
+    forward = camera_pose.rotation.apply([0.0, 0.0, 1.0])
+    forward[2] = 0.0
+    norm = float(np.linalg.norm(forward))
+    ahead = forward / norm * look_ahead_m if norm > 1e-9 else np.zeros(3)
+    return Pose(camera_pose.position + ahead, camera_pose.rotation)

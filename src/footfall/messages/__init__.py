@@ -17,6 +17,7 @@ from footfall.messages.types import EffectorTargets as EffectorTargets
 from footfall.messages.types import GaitState as GaitState
 from footfall.messages.types import GaitStatus as GaitStatus
 from footfall.messages.types import GroundPrior as GroundPrior
+from footfall.messages.types import ImuReading as ImuReading
 from footfall.messages.types import JointTargets as JointTargets
 from footfall.messages.types import LogLine as LogLine
 from footfall.messages.types import MapUpdate as MapUpdate
@@ -36,6 +37,7 @@ __all__ = [
     "GaitState",
     "GaitStatus",
     "GroundPrior",
+    "ImuReading",
     "JointTargets",
     "LogLine",
     "MapUpdate",

@@ -200,6 +200,27 @@ class PoseEstimate(Message):
 
 
 @dataclass(frozen=True)
+class ImuReading(Message):
+    """One reading of an inertial unit, turned into the body frame.
+
+    A robot whose backend has no IMU takes its attitude from one of these (a RealSense
+    D435i's, through its camera-to-body extrinsics).
+
+    Attributes:
+        stamp: Measurement time on the robot's clock [s].
+        angular_velocity_body_in_body: Gyro rates, shape (3,) [rad/s].
+        specific_force_body_in_body: Accelerometer reading, shape (3,) [m/s^2]: at rest it
+            points up, 9.81 m/s^2 long (the reaction to gravity).
+    """
+
+    TOPIC = "imu"
+
+    stamp: float
+    angular_velocity_body_in_body: npt.NDArray[np.float64]
+    specific_force_body_in_body: npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
 class GroundPrior(Message):
     """The ground around a standing robot, known from its feet before the camera sees it.
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -16,6 +16,7 @@ from footfall.mapping.engine import HeightMapConfig
 from footfall.mapping.snapshot import MapSnapshot
 from footfall.reports import write_json
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
+from footfall.sensing.pose import Pose
 
 if TYPE_CHECKING:
     from footfall.recording.session import Recorders
@@ -51,6 +52,10 @@ class MapRequest:
         record: An ``.mcap`` file to record every bus message to.
         rerun: An ``.rrd`` file to log the run to for the rerun viewer.
         rerun_spawn: Open a rerun viewer on the run.
+        realsense: A RealSense recording (``.bag``, ``.db3``) to map instead of simulating.
+        trajectory: The camera's poses for a RealSense recording (TUM format).
+        realsense_options: librealsense's depth filters (``decimation``, ``spatial``,
+            ``temporal``, ``hole_filling``).
     """
 
     terrain: str = "course"
@@ -72,6 +77,9 @@ class MapRequest:
     record: Path | None = None
     rerun: Path | None = None
     rerun_spawn: bool = False
+    realsense: Path | None = None
+    trajectory: Path | None = None
+    realsense_options: dict[str, str] = field(default_factory=dict)
 
     @property
     def fixed_camera(self) -> bool:
@@ -176,7 +184,11 @@ def run_map(request: MapRequest, on_tick: Callable[[float], None] | None = None)
     Raises:
         DatasetError: A recording without depth images, or malformed.
     """
-    recorded = request.tum is not None
+    recorded = request.tum is not None or request.realsense is not None
+    if request.tum is not None and request.realsense is not None:
+        raise ConfigError("map one recording: --tum or --realsense")
+    if request.trajectory is not None and request.realsense is None:
+        raise ConfigError("--trajectory goes with --realsense (a TUM sequence has its own)")
     fusion = request.fusion or ("variance" if recorded else "latest")
     map_config = HeightMapConfig(
         fusion=fusion, drift=DriftConfig(enabled=request.drift_compensation)
@@ -187,6 +199,8 @@ def run_map(request: MapRequest, on_tick: Callable[[float], None] | None = None)
 
     with Recorders(request.record, request.rerun, request.rerun_spawn) as recorders:
         bus = recorders.attach(InProcessBus())
+        if request.realsense is not None:
+            return _map_realsense(request, map_config, score_config, bus, recorders)
         if recorded:
             return _map_recording(request, map_config, score_config, bus, recorders)
         return _map_simulation(request, map_config, score_config, on_tick, bus, recorders)
@@ -227,6 +241,64 @@ def _map_simulation(
     )
 
 
+def _fixed_camera_pose(request: MapRequest) -> Pose:
+    """The camera's pose over the floor the request gives.
+
+    Raises:
+        ConfigError: No camera height.
+    """
+    import math
+
+    from footfall.pointcloud.ground import CameraOverFloor
+
+    if request.camera_height is None:
+        raise ConfigError("a fixed camera pose needs --camera-height (and its pitch and roll)")
+    floor = CameraOverFloor.from_angles(
+        request.camera_height,
+        math.radians(request.camera_pitch_deg or 0.0),
+        math.radians(request.camera_roll_deg or 0.0),
+    )
+    return Pose(np.array([0.0, 0.0, floor.height_m]), floor.rotation_camera_to_map)
+
+
+def _map_realsense(
+    request: MapRequest,
+    map_config: HeightMapConfig,
+    score_config: ScoreConfig,
+    bus: InProcessBus,
+    recorders: Recorders,
+) -> MapReport:
+    """Map a RealSense recording, by its trajectory or from a given camera pose."""
+    from footfall.datasets.realsense import map_realsense_recording
+    from footfall.hardware.realsense_types import RealSenseFilters
+
+    assert request.realsense is not None
+    if request.trajectory is None and not request.fixed_camera:
+        raise ConfigError(
+            "a RealSense recording needs the camera's poses: --trajectory FILE (TUM format), "
+            "or --camera-height and --camera-pitch-deg for a camera that did not move"
+        )
+    sequence = map_realsense_recording(
+        request.realsense,
+        map_config,
+        score_config,
+        trajectory=request.trajectory,
+        up=request.up,
+        camera_pose=None if request.trajectory is not None else _fixed_camera_pose(request),
+        filters=RealSenseFilters.from_options(dict(request.realsense_options)),
+        bus=bus,
+        on_mapping=recorders.mapping_started,
+    )
+    return MapReport(
+        sequence.snapshot,
+        sequence.scores,
+        sequence.camera_path_xy,
+        "camera path",
+        sequence.metrics,
+        score_config,
+    )
+
+
 def _map_recording(
     request: MapRequest,
     map_config: HeightMapConfig,
@@ -235,25 +307,14 @@ def _map_recording(
     recorders: Recorders,
 ) -> MapReport:
     """Map a recorded sequence, or frames from a given camera pose."""
-    import math
-
     from footfall.datasets.tum import load_depth_png, map_tum_sequence, read_fixed_view
-    from footfall.pointcloud.ground import CameraOverFloor
     from footfall.sensing.camera import PinholeCamera
     from footfall.sensing.noise import sensor_noise
-    from footfall.sensing.pose import Pose
 
     assert request.tum is not None
     pose = None
     if request.fixed_camera:
-        if request.camera_height is None:
-            raise ConfigError("a fixed camera pose needs --camera-height (and its pitch and roll)")
-        floor = CameraOverFloor.from_angles(
-            request.camera_height,
-            math.radians(request.camera_pitch_deg or 0.0),
-            math.radians(request.camera_roll_deg or 0.0),
-        )
-        pose = Pose(np.array([0.0, 0.0, floor.height_m]), floor.rotation_camera_to_map)
+        pose = _fixed_camera_pose(request)
         first = read_fixed_view(request.tum, pose)[0].depth_path
     else:
         first = read_fixed_view(request.tum, Pose.identity())[0].depth_path

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from footfall.backends import BackendSetup, HexapodBackend
-from footfall.backends.attitude import PoseAttitude
+from footfall.backends.attitude import ImuAttitude, PoseAttitude
 from footfall.backends.registry import BACKENDS
 from footfall.control_loop import WalkingGraph, WalkLog
 from footfall.messages import GaitState, GroundPrior
@@ -143,8 +143,10 @@ class WalkingRobot:
             )
             guard = PoseGuardNode(bus)
             if hasattr(backend, "attitude") and backend.attitude is None:
-                # A robot without an IMU takes its attitude from its pose source.
-                backend.attitude = PoseAttitude(bus)
+                # A robot without an IMU of its own takes its attitude from its camera's
+                # IMU where the camera has one, else from its pose source.
+                imu = getattr(camera, "has_imu", False)
+                backend.attitude = ImuAttitude(bus) if imu else PoseAttitude(bus)
             if standing.feet_in_world is not None:
                 ground = float(np.mean(standing.feet_in_world[:, 2])) - spec.foot_radius
             else:
