@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import signal
-import time
 
 import numpy as np
 import pytest
@@ -20,7 +19,7 @@ from footfall.sim.survey import MappingSettings, simulate_mapping
 from realsense_recordings import Frame, Motion, write_recording
 from test_realsense import GRAVITY, _float32
 from test_robot_network import wait_for
-from test_servo_bus_network import footfall
+from test_servo_bus_network import footfall, start_servo_bus
 from test_zenoh_bus import free_port
 
 # The camera's IMU says the body is pitched this much more than the trajectory does [deg].
@@ -75,13 +74,9 @@ def test_the_robot_maps_through_a_realsense_recording_and_takes_its_imu(tmp_path
     recording, trajectory, trajectory_pitch = _standing_recording(tmp_path)
     link = tmp_path / "ttyDXL"
     robot_endpoint = f"tcp/127.0.0.1:{free_port()}"
-    server = footfall("servo-bus", "--sim", "flat", "--link", str(link), "--seconds", "90")
+    server = start_servo_bus(link)
     robot = None
     try:
-        end = time.monotonic() + 30
-        while not link.is_symlink() and time.monotonic() < end:
-            time.sleep(0.1)
-        assert link.is_symlink(), server.communicate(timeout=5)[0].decode()
         robot = footfall(
             "robot", "--hardware", "default", "--port", str(link),
             "--realsense-file", str(recording), "--pose", "trajectory",

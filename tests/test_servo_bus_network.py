@@ -34,6 +34,18 @@ def footfall(*args: str) -> subprocess.Popen:
     )
 
 
+def start_servo_bus(link, *args: str) -> subprocess.Popen:
+    """`footfall servo-bus` on flat ground serving its servos at ``link``, once it is there."""
+    server = footfall("servo-bus", "--sim", "flat", "--link", str(link), "--seconds", "90", *args)
+    end = time.monotonic() + 30
+    while not link.is_symlink() and time.monotonic() < end and server.poll() is None:
+        time.sleep(0.1)
+    if not link.is_symlink():
+        server.kill()
+        raise AssertionError(server.communicate(timeout=5)[0].decode())
+    return server
+
+
 def test_the_robot_process_walks_on_the_emulated_bus_and_stops_on_the_watchdog(tmp_path):
     """The robot's process opens the emulated servos at the link, stands up when walking
     starts, steps while commands come, stands still on the watchdog when they stop, and
@@ -41,15 +53,9 @@ def test_the_robot_process_walks_on_the_emulated_bus_and_stops_on_the_watchdog(t
     link = tmp_path / "ttyDXL"
     sensors = f"tcp/127.0.0.1:{free_port()}"
     robot_endpoint = f"tcp/127.0.0.1:{free_port()}"
-    server = footfall(
-        "servo-bus", "--sim", "flat", "--link", str(link), "--listen", sensors, "--seconds", "90"
-    )
+    server = start_servo_bus(link, "--listen", sensors)
     robot = None
     try:
-        end = time.monotonic() + 30
-        while not link.is_symlink() and time.monotonic() < end:
-            time.sleep(0.1)
-        assert link.is_symlink(), server.communicate(timeout=5)[0].decode()
         robot = footfall(
             "robot", "--hardware", "default", "--port", str(link),
             "--camera-option", f"connect={sensors}", "--listen", robot_endpoint,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 from rich.console import Console
@@ -148,6 +149,19 @@ def add_walking_suites(kinds: argparse._SubParsersAction) -> None:
     soak.set_defaults(handler=run_soak)
 
 
+def _walking(args: argparse.Namespace, on_run: Callable[[str], None]) -> dict[str, object]:
+    """What both walking suites take from their common options: where and what to walk."""
+    return {
+        "jobs": args.jobs,
+        "on_run": on_run,
+        "first_seed": args.first_seed,
+        "robots": args.robot,
+        "gaits": args.gait,
+        "cluster": args.cluster,
+        "sets": args.sets,
+    }
+
+
 def run_terrain(args: argparse.Namespace, console: Console) -> int:
     """Walk the terrain sweep and print the results table."""
     from footfall.reliability.terrain_bench import terrain_benchmark_runs
@@ -161,15 +175,9 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
         report = run_terrain_bench(
             args.seeds,
             args.seconds,
-            jobs=args.jobs,
-            on_run=lambda label: progress.update(task, advance=1, description=label),
             terrains=args.terrains,
-            first_seed=args.first_seed,
             modes=args.modes,
-            robots=args.robot,
-            gaits=args.gait,
-            cluster=args.cluster,
-            sets=args.sets,
+            **_walking(args, lambda label: progress.update(task, advance=1, description=label)),
         )
     paths = report.write(args.out)
     bench = report.to_json()
@@ -225,14 +233,8 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
             args.seconds,
             faults=faults,
             terrains=terrains,
-            jobs=args.jobs,
-            on_run=lambda label: progress.update(task, advance=1, description=label),
             survey_seconds=args.survey_seconds,
-            first_seed=args.first_seed,
-            robots=args.robot,
-            gaits=args.gait,
-            cluster=args.cluster,
-            sets=args.sets,
+            **_walking(args, lambda label: progress.update(task, advance=1, description=label)),
         )
     paths = report.write(args.out)
     bench = report.to_json()

@@ -19,6 +19,7 @@ from footfall.scoring.walkability import ScoreConfig, ScoreMap
 from footfall.sensing.pose import Pose
 
 if TYPE_CHECKING:
+    from footfall.datasets.tum import SequenceMap
     from footfall.recording.session import Recorders
     from footfall.runtime.bus import InProcessBus
 
@@ -108,6 +109,18 @@ class MapReport:
     path_label: str
     metrics: dict[str, object]
     score_config: ScoreConfig
+
+    @classmethod
+    def of_sequence(cls, sequence: SequenceMap, score_config: ScoreConfig) -> MapReport:
+        """The report of a mapped recording (its path is the camera's)."""
+        return cls(
+            sequence.snapshot,
+            sequence.scores,
+            sequence.camera_path_xy,
+            "camera path",
+            sequence.metrics,
+            score_config,
+        )
 
     def to_json(self) -> dict[str, object]:
         """The ``metrics.json`` content."""
@@ -289,14 +302,7 @@ def _map_realsense(
         bus=bus,
         on_mapping=recorders.mapping_started,
     )
-    return MapReport(
-        sequence.snapshot,
-        sequence.scores,
-        sequence.camera_path_xy,
-        "camera path",
-        sequence.metrics,
-        score_config,
-    )
+    return MapReport.of_sequence(sequence, score_config)
 
 
 def _map_recording(
@@ -336,11 +342,4 @@ def _map_recording(
         bus=bus,
         on_mapping=recorders.mapping_started,
     )
-    return MapReport(
-        sequence.snapshot,
-        sequence.scores,
-        sequence.camera_path_xy,
-        "camera path",
-        sequence.metrics,
-        score_config,
-    )
+    return MapReport.of_sequence(sequence, score_config)
