@@ -221,3 +221,19 @@ def test_the_camera_table_places_the_camera_on_the_body():
     np.testing.assert_allclose(pose.rotation.apply([1.0, 0.0, 0.0]), [0.0, -1.0, 0.0], atol=1e-12)
     with pytest.raises(ConfigError, match="tilt"):
         camera_table_pose({"tilt": 3})
+
+
+def test_imu_readings_record_as_ros_imu_messages():
+    """In an MCAP file or a bag, the camera's IMU is a sensor_msgs/Imu on /camera/imu: its
+    rates and specific force in the body frame, the orientation marked as not measured."""
+    from footfall.recording.ros_types import to_ros
+
+    reading = ImuReading(1.5, np.array([0.1, -0.2, 0.3]), np.array([0.4, 0.0, 9.8]))
+    [(channel, kind, imu)] = to_ros(ImuReading.TOPIC, reading)
+    assert (channel, kind) == ("/camera/imu", "sensor_msgs/msg/Imu")
+    assert (imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z) == (
+        0.1, -0.2, 0.3,
+    )  # fmt: skip
+    assert (imu.linear_acceleration.x, imu.linear_acceleration.z) == (0.4, 9.8)
+    assert imu.orientation_covariance[0] == -1.0
+    assert imu.header.stamp.sec == 1 and imu.header.stamp.nanosec == 500_000_000

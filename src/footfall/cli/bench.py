@@ -49,6 +49,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     biped.add_argument("--first-seed", type=int, default=0, help="the rooms' seeds start here")
     biped.add_argument("--jobs", type=int, default=1, help="walks run in parallel")
     biped.add_argument(
+        "--cluster",
+        metavar="ADDRESS|auto",
+        default=None,
+        help="run every walk as a task on this Ray cluster instead of --jobs processes here",
+    )
+    biped.add_argument(
         "--out", type=Path, default=Path("footfall-out/bench-biped"), help="output folder"
     )
     biped.set_defaults(handler=run_biped)
@@ -81,6 +87,7 @@ def run_biped(args: argparse.Namespace, console: Console) -> int:
             args.seeds,
             first_seed=args.first_seed,
             jobs=args.jobs,
+            cluster=args.cluster,
             on_run=lambda label: progress.update(task, advance=1, description=label),
         )
     paths = report.write(args.out)

@@ -16,6 +16,7 @@ map                /map/grid                              grid_map_msgs/GridMap
 effector_targets   /effector_targets, /tf (foot_0..5)     footfall_msgs/EffectorTargets
 joint_targets      /joint_targets                         sensor_msgs/JointState
 state              /joint_states, /imu                    sensor_msgs/JointState, Imu
+imu                /camera/imu                            sensor_msgs/Imu (no orientation)
 status             /gait_status                           footfall_msgs/GaitStatus
 touchdown          /touchdowns                            footfall_msgs/Touchdown
 ground_prior       /ground_prior                          footfall_msgs/GroundPrior
@@ -333,6 +334,8 @@ def to_ros(topic: str, message: Message) -> list[tuple[str, str, Any]]:
         if message.color is not None:
             rgb = image(message.stamp, CAMERA_FRAME, message.color, "rgb8")
             out.append(("/camera/color/image_raw", "sensor_msgs/msg/Image", rgb))
+    elif type(message).__name__ == "ImuReading":
+        out.append(("/camera/imu", "sensor_msgs/msg/Imu", _imu_reading(message)))
     elif type(message).__name__ == "ColorImage":
         rgb = image(message.stamp, CAMERA_FRAME, message.image, "rgb8")
         out.append(("/camera/color/image_raw", "sensor_msgs/msg/Image", rgb))
@@ -462,6 +465,24 @@ def _robot_state(state: RobotState) -> list[tuple[str, str, Any]]:
         ("/joint_states", "sensor_msgs/msg/JointState", joints),
         ("/imu", "sensor_msgs/msg/Imu", imu),
     ]
+
+
+def _imu_reading(reading: Any) -> Any:
+    """A camera IMU's gyro and accelerometer in the body frame; it gives no orientation."""
+    vector = _t("geometry_msgs/msg/Vector3")
+    gx, gy, gz = (float(v) for v in reading.angular_velocity_body_in_body)
+    ax, ay, az = (float(v) for v in reading.specific_force_body_in_body)
+    no_orientation = np.zeros(9)
+    no_orientation[0] = -1.0  # ROS: covariance[0] = -1 where a field is not measured
+    return _t("sensor_msgs/msg/Imu")(
+        header=header(reading.stamp, BODY_FRAME),
+        orientation=_t("geometry_msgs/msg/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0),
+        orientation_covariance=no_orientation,
+        angular_velocity=vector(x=gx, y=gy, z=gz),
+        angular_velocity_covariance=np.zeros(9),
+        linear_acceleration=vector(x=ax, y=ay, z=az),
+        linear_acceleration_covariance=np.zeros(9),
+    )
 
 
 def _gait_status(status: GaitStatus) -> Any:

@@ -83,8 +83,12 @@ def run_biped_bench(
     jobs: int = 1,
     cases: tuple[int, ...] = TEST_CASES,
     on_run: Callable[[str], None] | None = None,
+    cluster: str | None = None,
 ) -> BipedBenchReport:
     """Walk the dissertation's maps and ``seeds`` random rooms.
+
+    The walks run in ``jobs`` processes, or as tasks on the Ray ``cluster`` at that address
+    (:func:`footfall.reliability.parallel.open_workers`).
 
     Raises:
         ConfigError: A negative seed count or fewer than one job.
@@ -97,7 +101,7 @@ def run_biped_bench(
         if on_run:
             on_run(f"{job[0]} {job[1]}")
 
-    with open_workers(jobs) as workers:
+    with open_workers(jobs, cluster) as workers:
         rows = workers.run(_one, work, done)
     runs = [rows[job] for job in work]
     return BipedBenchReport(runs, seeds)
