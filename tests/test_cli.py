@@ -277,3 +277,23 @@ def test_walk_paced_to_the_wall_clock(tmp_path):
     assert metrics["control_overruns"] >= 0 and "control_max_late_s" in metrics
     times = [metrics[f"command_ms_{k}"] for k in ("median", "p99", "max")]
     assert 0 <= times[0] <= times[1] <= times[2]
+
+
+def test_python_dash_m_footfall_is_the_command():
+    """`python -m footfall` runs the command line, as the `footfall` script does, and
+    `import footfall` loads its public names only when they are used."""
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-m", "footfall", "--help"], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0 and done.stdout.startswith("usage: footfall")
+    probe = "import sys, footfall; print('footfall.motion.walker' in sys.modules)"
+    lazy = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60)
+    assert lazy.stdout.strip() == "False"
+    import footfall
+
+    assert footfall.WalkController.__module__ == "footfall.motion.walker"
+    with pytest.raises(AttributeError, match="no attribute 'Nothing'"):
+        footfall.Nothing  # noqa: B018
