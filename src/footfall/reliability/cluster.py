@@ -134,10 +134,6 @@ class RayCluster:
             self._ray.shutdown()
             self._connected_here = False
 
-    def cpus(self) -> int:
-        """CPUs the cluster offers now, over all its nodes."""
-        return int(self._ray.cluster_resources().get("CPU", 0))
-
     def run(
         self, function: Callable[[T], R], jobs: Sequence[T], on_done: Callable[[T], None]
     ) -> dict[T, R]:
