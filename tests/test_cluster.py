@@ -7,7 +7,6 @@ traffic stays on this machine. Each node offers one CPU, so the walks spread ove
 import json
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -18,6 +17,7 @@ import pytest
 
 from footfall.cli import main
 from footfall.reliability.cluster import local_cluster
+from test_zenoh_bus import free_port
 
 BIN = Path(sys.executable).parent
 # A small sweep: two single-layout terrains, two modes, two seeds: 8 walks.
@@ -25,12 +25,6 @@ SWEEP = ["bench", "terrain", "--terrains", "course,dead_end", "--modes", "planne
 SWEEP += ["--seeds", "2", "--seconds", "2"]
 # Ray's task for a walk of the terrain sweep names its worker process after the function.
 WALK_PROCESS = "ray::_terrain_run"
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.fixture(scope="module")
@@ -124,7 +118,7 @@ def test_a_walk_lost_with_its_worker_is_walked_again(ray_cluster, local_sweep, t
 
 def test_a_cluster_that_does_not_answer_is_named(tmp_path, capsys):
     """An address where no cluster listens fails at once, naming the address."""
-    address = f"127.0.0.1:{_free_port()}"
+    address = f"127.0.0.1:{free_port()}"
     assert main([*SWEEP, "--cluster", address, "--out", str(tmp_path)]) == 2
     assert address in capsys.readouterr().out
     assert not (tmp_path / "bench.json").exists()

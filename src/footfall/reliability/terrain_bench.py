@@ -237,6 +237,9 @@ def run_terrain_benchmark(
         return sum(r["successes"] for r in mine) / runs_of_mode
 
     planned = [runs[job] for job in work if job[6] == "planned"]  # the job's mode
+    of_variant: dict[Variant, list[dict]] = {v: [] for v in variants}
+    for job in work:
+        of_variant[Variant(*job[:3])].append(runs[job])
     medians = [o["replan_ms_median"] for o in planned if np.isfinite(o["replan_ms_median"])]
     p95s = [o["replan_ms_p95"] for o in planned if np.isfinite(o["replan_ms_p95"])]
     return {
@@ -249,7 +252,7 @@ def run_terrain_benchmark(
         "results": rows,
         "settings": sorted({name for v in variants for name, _ in v.overrides}),
         "variants": [
-            {**rates, **_walking_medians([runs[job] for job in work if Variant(*job[:3]) == v])}
+            {**rates, **_walking_medians(of_variant[v])}
             for v, rates in zip(variants, variant_rates(rows, variants, chosen), strict=True)
         ],
         "planned_success_rate": rate("planned"),
