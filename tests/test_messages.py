@@ -14,6 +14,7 @@ from footfall.errors import MessageError
 from footfall.messages import (
     Ack,
     BipedPlan,
+    BipedStatus,
     ColorImage,
     DepthFrame,
     EffectorTargets,
@@ -151,6 +152,17 @@ def examples(rng: np.random.Generator) -> list:
         ColorImage(0.25, rng.integers(0, 255, (48, 64, 3), dtype=np.uint8), 7),
         Ack(False, "the goal lies inside an obstacle"),
         ImuReading(0.25, rng.normal(size=3), np.array([0.1, -0.2, 9.81])),
+        BipedStatus(
+            3.5,
+            "stopping",
+            rng.normal(size=2),
+            0.3,
+            rng.normal(size=(2, 3)),
+            np.array([np.nan, np.nan]),
+            12,
+            0,
+            "no heartbeat from the station for 0.6 s",
+        ),
     ]
 
 

@@ -21,14 +21,14 @@ Frames: the ground (world) frame, z up; foot positions are sole centres, heading
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
 import scipy.linalg
 
 from footfall.biped.footsteps import Footsteps
-from footfall.biped.lipm import GRAVITY
+from footfall.biped.lipm import GRAVITY, WalkParameter
 from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
 
@@ -163,24 +163,53 @@ def preview_com(
     The reference is held at its last value beyond its end, and the COM starts at rest
     over the first ZMP sample.
     """
+    return _preview(zmp, com_height, dt, preview_time)[0]
+
+
+def _preview(
+    zmp: npt.NDArray[np.float64],
+    com_height: float,
+    dt: float,
+    preview_time: float,
+    state: npt.NDArray[np.float64] | None = None,
+    samples: int | None = None,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """Preview control over the first ``samples`` samples of ``zmp`` (all by default).
+
+    Args:
+        zmp: ZMP reference, shape (k, 2) [m], held at its last value beyond its end.
+        com_height: ``z_c`` [m].
+        dt: Sampling period [s].
+        preview_time: How far the controller looks ahead [s].
+        samples: How many samples to run (all when None).
+        state: Per axis ``(x, x', x'', summed ZMP error)`` at the first sample, shape
+            (2, 4); None: at rest over the first ZMP sample.
+
+    Returns:
+        The COM, shape (samples, 2) [m], and the state after the last sample.
+    """
     horizon = max(2, round(preview_time / dt))
     g_i, g_x, g_d = preview_gains(com_height, dt, horizon)
     a = np.array([[1.0, dt, dt * dt / 2], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
     b = np.array([dt**3 / 6, dt * dt / 2, dt])
     c = np.array([1.0, 0.0, -com_height / GRAVITY])
-    k = len(zmp)
+    k = len(zmp) if samples is None else samples
     padded = np.vstack([zmp, np.repeat(zmp[-1:], horizon, axis=0)])
     out = np.empty((k, 2))
+    after = np.empty((2, 4))
     for axis in range(2):
-        x = np.array([zmp[0, axis], 0.0, 0.0])
-        error = 0.0
+        if state is None:
+            x, error = np.array([zmp[0, axis], 0.0, 0.0]), 0.0
+        else:
+            x, error = np.array(state[axis, :3], dtype=np.float64), float(state[axis, 3])
         ref = padded[:, axis]
         for i in range(k):
             out[i, axis] = x[0]
             error += float(c @ x) - ref[i]
             u = -g_i * error - g_x @ x - g_d @ ref[i + 1 : i + 1 + horizon]
             x = a @ x + b * u
-    return out
+        after[axis] = (*x, error)
+    return out, after
 
 
 def gait_pattern(
@@ -278,3 +307,57 @@ def gait_pattern(
         foothold_sides=tuple(footsteps.sides),
         landing_time=np.array(landing),
     )
+
+
+def step_at(pattern_time: float, config: GaitConfig) -> int:
+    """The step under way at ``pattern_time`` (1 for the first, also before it lifts)."""
+    begin = config.hold_time + config.start_time
+    return max(1, math.ceil((pattern_time - begin) / config.step_time - 1e-9))
+
+
+def stop_after_step(
+    pattern: GaitPattern,
+    footsteps: Footsteps,
+    pattern_time: float,
+    config: GaitConfig | None = None,
+) -> tuple[GaitPattern, Footsteps]:
+    """End the walk with the step under way at ``pattern_time``, the feet side by side.
+
+    The step under way finishes on its planned foothold; one more step brings the other
+    foot beside it (the plan's step width apart); the robot settles on both feet. The
+    ZMP reference is the old one up to the end of the step under way, and the COM
+    continues from its state at ``pattern_time`` (preview control carried on from there),
+    so the references do not jump when the walker switches patterns.
+
+    Args:
+        pattern: The pattern being walked (made by :func:`gait_pattern` with ``config``).
+        footsteps: Its footsteps.
+        pattern_time: Time into the pattern [s].
+        config: The timing it was made with.
+
+    Returns:
+        The pattern to walk from ``pattern_time`` on and its footsteps; the same ones when
+        the walk already ends within a step.
+    """
+    c = config or GaitConfig()
+    n = step_at(pattern_time, c)
+    if n >= len(footsteps.positions) - 2:
+        return pattern, footsteps
+    side = footsteps.sides[n]
+    other = "right" if side == "left" else "left"
+    heading = float(footsteps.headings[n])
+    width = footsteps.parameters[0].width if footsteps.parameters else 0.2
+    across = np.array([-math.sin(heading), math.cos(heading)])
+    closing = footsteps.positions[n] + (width if other == "left" else -width) * across
+    stopped = Footsteps(
+        positions=np.vstack([footsteps.positions[: n + 1], closing]),
+        headings=np.append(footsteps.headings[: n + 1], heading),
+        sides=(*footsteps.sides[: n + 1], other),
+        parameters=(*footsteps.parameters[: n + 1], WalkParameter(0.0, width, heading)),
+    )
+    feet = {s: (*pattern.feet[s][0][:2], float(pattern.foot_yaw[s][0])) for s in pattern.feet}
+    new = gait_pattern(stopped, feet, pattern.com_height, c)
+    i = pattern.index(pattern_time)
+    _, state = _preview(pattern.zmp, pattern.com_height, c.dt, c.preview_time, samples=i)
+    tail, _ = _preview(new.zmp[i:], pattern.com_height, c.dt, c.preview_time, state=state)
+    return replace(new, com=np.vstack([pattern.com[:i], tail])), stopped

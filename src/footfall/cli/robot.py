@@ -145,7 +145,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="TOPIC=HZ",
         help="largest rate a topic is sent out at (HZ 'all' for every message); repeatable",
     )
-    biped = p.add_argument_group("biped (no body yet: its vision and planning node)")
+    biped = p.add_argument_group("biped: its vision and planning node, and Archie in a room")
     biped.add_argument(
         "--biped",
         action="store_true",
@@ -153,6 +153,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "new_map, clear) instead of simulating the hexapod",
     )
     source = biped.add_mutually_exclusive_group()
+    source.add_argument(
+        "--room",
+        type=int,
+        metavar="SEED",
+        help="Archie walks in MuJoCo in this seeded room, seeing through its head camera: a "
+        "goal planned to is walked while the station sends mode walking",
+    )
     source.add_argument("--case", type=int, help="what the capture sees: a dissertation map")
     source.add_argument("--map", type=Path, help="what the capture sees: a map file")
     source.add_argument("--cloud", type=Path, help="what the capture sees: a point cloud")
@@ -200,14 +207,22 @@ def run(args: argparse.Namespace, console: Console) -> int:
             case=args.case,
             map=args.map,
             cloud=args.cloud,
+            room=args.room,
             network=network_config(args),
             seconds=args.seconds,
         )
-        served = run_biped(request, on_ready=_ready(console, args, "biped planning"))
+        what = "biped planning" if args.room is None else "Archie walking in MuJoCo"
+        served = run_biped(request, on_ready=_ready(console, args, what))
         console.print(f"served {', '.join(served['services'])} on {served['map']}")
+        if "state" in served:
+            console.print(
+                f"Archie {served['state']}: {served['footsteps']} footsteps, "
+                f"{served['collisions']} collisions, COM at "
+                f"({served['com'][0]:.2f}, {served['com'][1]:.2f}) m"
+            )
         return 0
-    if args.case is not None or args.map is not None or args.cloud is not None:
-        raise ConfigError("--case, --map and --cloud go with --biped")
+    if any(v is not None for v in (args.case, args.map, args.cloud, args.room)):
+        raise ConfigError("--case, --map, --cloud and --room go with --biped")
     backend, backend_options = args.backend, key_values("--backend-option", args.backend_option)
     camera, pose, robot, terrain = args.camera or "sim", args.pose or "sim", "default", args.sim
     if args.hardware is not None:

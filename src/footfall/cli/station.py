@@ -41,6 +41,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="the biped's station: capture and clear buttons, obstacles, path, footsteps and "
         "COM, and a clicked goal planned to (start_planning)",
     )
+    p.add_argument(
+        "--goal",
+        nargs=2,
+        type=float,
+        metavar=("X", "Y"),
+        help="a goal on the ground (map frame, m) sent as a click would, once the robot is "
+        "heard: walked to along the routes (hexapod), planned to and walked (biped)",
+    )
     p.set_defaults(handler=run)
 
 
@@ -56,6 +64,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
     with stop_on_signals() as stopped, ZenohBus(network_config(args)) as bus:
         spec = None if args.biped else load_spec(args.robot)
         station = Station(bus, host=args.host, port=args.port, biped=args.biped, spec=spec)
+        if args.goal is not None:
+            station.pending_goal = (args.goal[0], args.goal[1])
         console.print(
             f"station for robot [bold]{args.name}[/] at http://{args.host}:{args.port}",
             highlight=False,

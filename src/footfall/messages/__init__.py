@@ -2,6 +2,7 @@
 
 from footfall.messages.biped import Ack as Ack
 from footfall.messages.biped import BipedPlan as BipedPlan
+from footfall.messages.biped import BipedStatus as BipedStatus
 from footfall.messages.biped import NewMap as NewMap
 from footfall.messages.biped import Obstacles as Obstacles
 from footfall.messages.biped import PlanningGoal as PlanningGoal
@@ -31,6 +32,7 @@ from footfall.messages.types import WalkCommand as WalkCommand
 __all__ = [
     "Ack",
     "BipedPlan",
+    "BipedStatus",
     "ColorImage",
     "DepthFrame",
     "EffectorTargets",

@@ -17,6 +17,8 @@ import numpy.typing as npt
 from footfall.errors import MessageError
 from footfall.messages.codec import Message
 
+BIPED_STATES = ("standing", "walking", "stopping", "fallen", "frozen")
+
 
 def _same_length(name: str, *arrays: npt.NDArray) -> None:
     lengths = {len(a) for a in arrays}
@@ -72,6 +74,43 @@ class BipedPlan(Message):
 
     def __post_init__(self) -> None:
         _same_length("plan footsteps", self.footsteps, self.left)
+
+
+@dataclass(frozen=True)
+class BipedStatus(Message):
+    """What the walking biped is doing, where it stands and where it goes.
+
+    Attributes:
+        stamp: When it was measured [s].
+        state: ``standing``, ``walking``, ``stopping`` (ending the step under way, feet
+            together), ``fallen`` or ``frozen`` (a pose it could not reach).
+        com: The centre of mass's ground point ``(x, y)`` [m].
+        heading: Heading of the feet [rad].
+        feet: Left and right sole centres and headings ``(x, y, heading)``, shape (2, 3)
+            [m, rad].
+        goal: The goal being walked to ``(x, y)`` [m]; NaN when there is none.
+        footsteps: Footsteps taken since the robot started.
+        collisions: Contacts of the body with obstacles since the robot started.
+        text: Why it stopped or stands, or what it does.
+    """
+
+    TOPIC = "biped/status"
+
+    stamp: float
+    state: str
+    com: npt.NDArray[np.float64]
+    heading: float
+    feet: npt.NDArray[np.float64]
+    goal: npt.NDArray[np.float64]
+    footsteps: int
+    collisions: int
+    text: str = ""
+
+    def __post_init__(self) -> None:
+        if self.state not in BIPED_STATES:
+            raise MessageError(f"biped state must be one of {', '.join(BIPED_STATES)}")
+        if np.shape(self.feet) != (2, 3) or np.shape(self.com) != (2,):
+            raise MessageError("biped status: feet must be (2, 3) and the COM (2,)")
 
 
 @dataclass(frozen=True)

@@ -82,6 +82,9 @@ class BipedRequest:
         case: One of the dissertation's maps as what the capture sees, or None.
         map: A map file as what the capture sees, or None.
         cloud: A point cloud whose detected obstacles the capture sees, or None.
+        room: Seed of a room where Archie walks in MuJoCo, seeing through its head camera
+            and walking the goals planned to; None: the planning node alone.
+        look_ahead_m: In a room, how far to walk along a plan between looks [m].
         network: How to join the network.
         seconds: Longest run [s].
     """
@@ -89,6 +92,8 @@ class BipedRequest:
     case: int | None = None
     map: Path | None = None
     cloud: Path | None = None
+    room: int | None = None
+    look_ahead_m: float = 1.0
     network: ZenohConfig = field(default_factory=ZenohConfig)
     seconds: float = 600.0
 
@@ -106,6 +111,8 @@ def run_biped(
     from footfall.biped.maps import dissertation_map, load_map
     from footfall.nodes.biped_planning import SERVICES, BipedPlanningNode
 
+    if request.room is not None:
+        return run_walking_biped(request, on_ready)
     if request.cloud is not None:
         from footfall.reports.biped import CloudRequest, detect
 
@@ -126,3 +133,42 @@ def run_biped(
             network.spin(1.0 / rate_hz)
             node.tick()
     return {"services": list(SERVICES), "obstacles_in_view": len(circles), "map": name}
+
+
+def run_walking_biped(
+    request: BipedRequest,
+    on_ready: Callable[[ZenohBus], None] | None = None,
+    spin_s: float = 0.002,
+) -> dict[str, object]:
+    """Archie in its room on the network, paced to the wall clock, until stopped.
+
+    Returns:
+        What was served and how the walk went: state, footsteps, collisions, the COM.
+    """
+    from footfall.nodes.biped_planning import SERVICES
+    from footfall.sim.biped_robot import WalkingBiped
+    from footfall.sim.biped_room import make_room
+
+    room = make_room(request.room)
+    with stop_on_signals() as stop, ZenohBus(request.network) as network:
+        robot = WalkingBiped.build(network, room, look_ahead_m=request.look_ahead_m)
+        try:
+            if on_ready is not None:
+                on_ready(network)
+            end = time.monotonic() + request.seconds
+            while not stop() and time.monotonic() < end:
+                network.spin(spin_s)
+                robot.tick(time.monotonic())
+            robot.walker.publish_status()
+        finally:
+            robot.close()
+    walker = robot.walker
+    return {
+        "services": list(SERVICES),
+        "map": room.name,
+        "state": walker.state,
+        "footsteps": walker.footsteps_taken,
+        "collisions": robot.sim.collisions,
+        "com": robot.sim.com()[:2].tolist(),
+        "late_s": walker.late_s,
+    }

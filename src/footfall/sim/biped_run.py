@@ -155,7 +155,7 @@ class BipedWalk:
         }
 
 
-def _standing_feet(
+def standing_feet(
     sim: BipedSimulation,
 ) -> tuple[dict[str, tuple[float, float, float]], npt.NDArray[np.float64], float]:
     """The feet where they stand, their midpoint and heading."""
@@ -167,17 +167,24 @@ def _standing_feet(
     return feet, mid, mean_heading(feet["left"][2], feet["right"][2])
 
 
-def _ideal_feet(start, heading: float, width: float) -> dict[str, tuple[float, float, float]]:
+def ideal_feet(start, heading: float, width: float) -> dict[str, tuple[float, float, float]]:
+    """Feet side by side, ``width`` apart, about ``start`` facing ``heading`` [m], [rad]."""
     normal = np.array([-math.sin(heading), math.cos(heading)])
     s = np.asarray(start, dtype=np.float64)
     left, right = s + 0.5 * width * normal, s - 0.5 * width * normal
     return {"left": (*left, heading), "right": (*right, heading)}
 
 
-def _gait(spec: BipedSpec, footsteps: Footsteps, feet, z_c: float, lipm: LipmConfig) -> GaitPattern:
-    return gait_pattern(
-        footsteps, feet, z_c, GaitConfig(step_time=lipm.support_time, step_height=spec.step_height)
-    )
+def gait_config(spec: BipedSpec, lipm: LipmConfig) -> GaitConfig:
+    """The gait's timing and step height for a robot and its pendulum settings."""
+    return GaitConfig(step_time=lipm.support_time, step_height=spec.step_height)
+
+
+def gait_for(
+    spec: BipedSpec, footsteps: Footsteps, feet, z_c: float, lipm: LipmConfig
+) -> GaitPattern:
+    """The gait that walks ``footsteps`` from standing on ``feet``."""
+    return gait_pattern(footsteps, feet, z_c, gait_config(spec, lipm))
 
 
 def walk_plan_map(
@@ -185,7 +192,7 @@ def walk_plan_map(
 ) -> BipedWalk:
     """Plan a known map once and walk it."""
     obstacles = _cylinders(plan_map.obstacles)
-    feet = _ideal_feet(plan_map.start, 0.0, plan_map.limits.width)
+    feet = ideal_feet(plan_map.start, 0.0, plan_map.limits.width)
     sim = BipedSimulation(spec, mujoco.MjModel.from_xml_string(biped_mjcf(spec, obstacles)))
     z_c = stand(sim, feet)
     lipm = LipmConfig(com_height=z_c)
@@ -198,9 +205,9 @@ def walk_plan_map(
 
 def _walk(sim, plan: WalkPlan, feet, z_c: float, lipm: LipmConfig, stabiliser, name, obstacles):
     """Walk one plan from standing on ``feet``."""
-    pattern = _gait(sim.spec, plan.footsteps, feet, z_c, lipm)
+    pattern = gait_for(sim.spec, plan.footsteps, feet, z_c, lipm)
     run = run_pattern(sim, pattern, stabiliser)
-    reached = not run.fell and _near(sim.com()[:2], plan.map.goal)
+    reached = not run.fell and near_goal(sim.com()[:2], plan.map.goal)
     segment = Segment(plan, pattern, run)
     return BipedWalk(
         name, plan.map, obstacles, [segment], reached, run.fell, run.collisions, None, sim.spec
@@ -218,7 +225,7 @@ def walk_kajita(spec: BipedSpec, stabiliser: StabiliserConfig) -> BipedWalk:
     """
     params = [WalkParameter(sx, 0.2) for sx in KAJITA_STEPS]
     footsteps = footsteps_from_parameters(params, (0.0, 0.0), first_step_left=False)
-    feet = _ideal_feet((0.0, 0.0), 0.0, 0.2)
+    feet = ideal_feet((0.0, 0.0), 0.0, 0.2)
     sim = BipedSimulation(spec, mujoco.MjModel.from_xml_string(biped_mjcf(spec)))
     z_c = stand(sim, feet)
     lipm = LipmConfig(com_height=z_c)
@@ -231,11 +238,12 @@ def walk_kajita(spec: BipedSpec, stabiliser: StabiliserConfig) -> BipedWalk:
     return _walk(sim, plan, feet, z_c, lipm, stabiliser, "kajita", ())
 
 
-def _near(point, goal) -> bool:
+def near_goal(point, goal) -> bool:
+    """Whether a COM point ends close enough to the goal."""
     return float(np.hypot(*(np.asarray(point) - np.asarray(goal)))) <= GOAL_TOLERANCE
 
 
-def _truncate(waypoints: npt.NDArray[np.float64], length: float) -> npt.NDArray[np.float64]:
+def truncate_path(waypoints: npt.NDArray[np.float64], length: float) -> npt.NDArray[np.float64]:
     """The path's first ``length`` metres."""
     out = [waypoints[0]]
     left = length
@@ -257,7 +265,7 @@ def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWa
     model = mujoco.MjModel.from_xml_string(biped_mjcf(spec, room.obstacles, mount))
     sim = BipedSimulation(spec, model)
     limits = PlanMap(room.name, room.start, room.goal, ()).limits
-    z_c = stand(sim, _ideal_feet(room.start, 0.0, limits.width))
+    z_c = stand(sim, ideal_feet(room.start, 0.0, limits.width))
     lipm = LipmConfig(com_height=z_c)
     seen: list[Circle] = []
     segments: list[Segment] = []
@@ -268,8 +276,8 @@ def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWa
     try:
         for _ in range(request.max_looks):
             seen = look(camera, sim, seen)
-            feet, here, heading = _standing_feet(sim)
-            if _near(here, room.goal):
+            feet, here, heading = standing_feet(sim)
+            if near_goal(here, room.goal):
                 break
             plan_map = body_plan_map(PlanMap(room.name, tuple(here), room.goal, tuple(seen)), spec)
             try:
@@ -277,10 +285,10 @@ def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWa
             except PlanningError as exc:
                 no_route = str(exc)
                 break
-            stretch = _truncate(full.path.waypoints, request.look_ahead_m)
+            stretch = truncate_path(full.path.waypoints, request.look_ahead_m)
             footsteps = plan_footsteps(stretch, limits, initial_heading=heading)
             plan = replace(full, footsteps=footsteps)
-            pattern = _gait(spec, footsteps, feet, z_c, lipm)
+            pattern = gait_for(spec, footsteps, feet, z_c, lipm)
             run = run_pattern(sim, pattern, request.stabiliser)
             segments.append(Segment(plan, pattern, run, tuple(seen), stretch))
             if run.fell or run.stopped:
@@ -288,7 +296,7 @@ def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWa
     finally:
         camera.close()
     fell = any(s.run.fell for s in segments)
-    reached = not fell and _near(sim.com()[:2], room.goal)
+    reached = not fell and near_goal(sim.com()[:2], room.goal)
     full_map = PlanMap(room.name, room.start, room.goal, tuple(seen))
     return BipedWalk(
         room.name, full_map, room.obstacles, segments, reached, fell, sim.collisions, no_route, spec

@@ -240,6 +240,104 @@ def start_pose(sim: BipedSimulation, pattern: GaitPattern) -> float:
     )
 
 
+class PatternRunner:
+    """Walks a pattern one control tick at a time, from its standing start.
+
+    Args:
+        sim: The simulation, its robot placed with :func:`start_pose`.
+        pattern: The gait.
+        stabiliser: Gains (defaults when None).
+
+    Attributes:
+        t: Time into the pattern [s].
+        finished: The pattern ended, the robot fell, or it held still after a pose it
+            could not reach.
+    """
+
+    def __init__(
+        self,
+        sim: BipedSimulation,
+        pattern: GaitPattern,
+        stabiliser: StabiliserConfig | None = None,
+    ) -> None:
+        self.sim = sim
+        self.pattern = pattern
+        self.controller = GaitController(sim, pattern, stabiliser)
+        self.log = BipedLog()
+        self.fell = False
+        self.finished = False
+        self.stopped: str | None = None
+        self.t = 0.0
+        self.landed: list[npt.NDArray[np.float64]] = []
+        self._next_landing = 1
+        self._hold_until = math.inf
+        self._joints = sim.data.ctrl.copy()
+        self._zmp, _ = sim.measured_zmp()
+        self._started = time.perf_counter()
+
+    def switch(self, pattern: GaitPattern) -> None:
+        """Walk on with another pattern on the same time line (one that ends sooner)."""
+        self.pattern = pattern
+        self.controller.pattern = pattern
+
+    def tick(self) -> bool:
+        """One control period; returns whether the walk goes on."""
+        pattern, sim = self.pattern, self.sim
+        if self.finished or self.t > pattern.duration:
+            self.finished = True
+            return False
+        i = pattern.index(self.t)
+        if self.stopped is None:
+            try:
+                self._joints = self.controller.update(i, CONTROL_PERIOD, self._zmp)
+            except UnreachableTargetError as exc:
+                # Freeze: hold the last targets and watch whether it stays up.
+                self.stopped = str(exc)
+                self._hold_until = self.t + HOLD_AFTER_STOP
+        elif self.t >= self._hold_until:
+            self.finished = True
+            return False
+        sim.command(self._joints)
+        sim.step(CONTROL_PERIOD)
+        self.t += CONTROL_PERIOD
+        zmp, hull = sim.measured_zmp()
+        self._zmp = zmp
+        log, anchor = self.log, self.controller.anchor
+        log.time.append(self.t)
+        log.com.append(sim.com()[:2])
+        log.com_ref.append(pattern.com[i] + anchor)
+        log.zmp.append(np.full(2, np.nan) if zmp is None else zmp)
+        log.zmp_ref.append(pattern.zmp[i] + anchor)
+        log.zmp_margin.append(np.nan if zmp is None else polygon_margin(hull, zmp))
+        log.joints.append(sim.joints)
+        log.targets.append(self._joints)
+        log.support_polygon.append(hull if len(hull) else None)
+        while self._next_landing < len(pattern.landing_time) and self.t >= (
+            pattern.landing_time[self._next_landing] + FOOTHOLD_SETTLE
+        ):
+            side = pattern.foothold_sides[self._next_landing]
+            self.landed.append(sim.sole(side)[:2])
+            self._next_landing += 1
+        if sim.fallen():
+            self.fell = self.finished = True
+            return False
+        return True
+
+    def result(self) -> BipedRun:
+        """The walk so far."""
+        return BipedRun(
+            log=self.log,
+            pattern=self.pattern,
+            fell=self.fell,
+            collisions=self.sim.collisions,
+            actual_footholds=np.array(self.landed).reshape(-1, 2),
+            wall_seconds=time.perf_counter() - self._started,
+            sim_seconds=self.t,
+            warnings=self.sim.warnings_seen,
+            stopped=self.stopped,
+        )
+
+
 def run_pattern(
     sim: BipedSimulation,
     pattern: GaitPattern,
@@ -252,56 +350,7 @@ def run_pattern(
         pattern: The gait.
         stabiliser: Gains (defaults when None).
     """
-    controller = GaitController(sim, pattern, stabiliser)
-    log = BipedLog()
-    fell = False
-    started = time.perf_counter()
-    t = 0.0
-    landed: list[npt.NDArray[np.float64]] = []
-    next_landing = 1
-    stopped = None
-    joints = sim.data.ctrl.copy()
-    zmp, hull = sim.measured_zmp()
-    while t <= pattern.duration:
-        i = pattern.index(t)
-        if stopped is None:
-            try:
-                joints = controller.update(i, CONTROL_PERIOD, zmp)
-            except UnreachableTargetError as exc:
-                # Freeze: hold the last targets and watch whether it stays up.
-                stopped = str(exc)
-                hold_until = t + HOLD_AFTER_STOP
-        elif t >= hold_until:
-            break
-        sim.command(joints)
-        sim.step(CONTROL_PERIOD)
-        t += CONTROL_PERIOD
-        zmp, hull = sim.measured_zmp()
-        log.time.append(t)
-        log.com.append(sim.com()[:2])
-        log.com_ref.append(pattern.com[i] + controller.anchor)
-        log.zmp.append(np.full(2, np.nan) if zmp is None else zmp)
-        log.zmp_ref.append(pattern.zmp[i] + controller.anchor)
-        log.zmp_margin.append(np.nan if zmp is None else polygon_margin(hull, zmp))
-        log.joints.append(sim.joints)
-        log.targets.append(joints)
-        log.support_polygon.append(hull if len(hull) else None)
-        while next_landing < len(pattern.landing_time) and t >= (
-            pattern.landing_time[next_landing] + FOOTHOLD_SETTLE
-        ):
-            landed.append(sim.sole(pattern.foothold_sides[next_landing])[:2])
-            next_landing += 1
-        if sim.fallen():
-            fell = True
-            break
-    return BipedRun(
-        log=log,
-        pattern=pattern,
-        fell=fell,
-        collisions=sim.collisions,
-        actual_footholds=np.array(landed).reshape(-1, 2),
-        wall_seconds=time.perf_counter() - started,
-        sim_seconds=t,
-        warnings=sim.warnings_seen,
-        stopped=stopped,
-    )
+    runner = PatternRunner(sim, pattern, stabiliser)
+    while runner.tick():
+        pass
+    return runner.result()

@@ -71,7 +71,7 @@ class PageView:
         self.link_text.content = (
             f"**link:** {'connected' if up else 'lost'}, last message "
             + (f"{age:.2f} s ago" if math.isfinite(age) else "never")
-            + ("" if self.biped else f"; sending **{mode.value}**")
+            + f"; sending **{mode.value}**"
         )
         if robot.status is not None:
             s = robot.status
@@ -88,6 +88,16 @@ class PageView:
             self.pose_text.content = (
                 f"**pose:** x {p.x:.3f} m, y {p.y:.3f} m, yaw {math.degrees(p.yaw):.1f} deg, "
                 f"body z {s.body_z:.3f} m"
+            )
+        if robot.biped is not None:
+            b = robot.biped
+            self.status_text.content = (
+                f"**status:** {b.state}, {b.footsteps} footsteps, {b.collisions} collisions; "
+                f"{b.text}"
+            )
+            self.pose_text.content = (
+                f"**pose:** COM x {b.com[0]:.3f} m, y {b.com[1]:.3f} m, "
+                f"heading {math.degrees(b.heading):.1f} deg"
             )
         if robot.servos is not None:
             self.servo_text.content = servo_readout(robot.servos)
@@ -154,6 +164,13 @@ class PageView:
             feet = feet_segments(p.footsteps, FOOT_LENGTH, FOOT_WIDTH)
             scene.add_line_segments("/biped/footsteps", feet, (20, 170, 40))
             scene.add_line_segments("/biped/com", polyline_segments(p.com, 0.02), (0, 0, 0))
+        if robot.biped is not None:  # where the walking biped's feet stand now
+            b = robot.biped
+            feet = feet_segments(np.asarray(b.feet), FOOT_LENGTH, FOOT_WIDTH)
+            scene.add_line_segments("/biped/feet", feet, (250, 160, 0))
+            scene.add_icosphere(
+                "/biped/body", radius=0.05, color=(80, 120, 220), position=(*b.com, 0.6)
+            )
 
 
 def servo_readout(status: ServoStatus) -> str:

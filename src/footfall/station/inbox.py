@@ -11,6 +11,7 @@ import numpy as np
 
 from footfall.messages import (
     BipedPlan,
+    BipedStatus,
     ColorImage,
     DepthFrame,
     EffectorTargets,
@@ -41,6 +42,7 @@ class RobotView:
         map: Map update, or None.
         obstacles: The biped's obstacles, or None.
         plan: The biped's plan, or None.
+        biped: The walking biped's status, or None.
         servos: The servo node's posture and servo health, or None.
         footholds: Chosen footholds, newest last, shape (3,) each [m].
         log: Log lines, formatted for the page.
@@ -55,6 +57,7 @@ class RobotView:
     map: MapUpdate | None = None
     obstacles: Obstacles | None = None
     plan: BipedPlan | None = None
+    biped: BipedStatus | None = None
     servos: ServoStatus | None = None
     footholds: deque[np.ndarray] = field(default_factory=lambda: deque(maxlen=FOOTHOLDS_KEPT))
     log: deque[str] = field(default_factory=lambda: deque(maxlen=LOG_LINES_KEPT))
@@ -73,6 +76,7 @@ class RobotView:
             (LogLine.TOPIC, self._on_log),
             (Obstacles.TOPIC, self._on_obstacles),
             (BipedPlan.TOPIC, self._on_plan),
+            (BipedStatus.TOPIC, self._on_biped),
             (ServoStatus.TOPIC, self._on_servos),
         ):
             bus.subscribe(topic, handler)
@@ -111,6 +115,10 @@ class RobotView:
     def _on_plan(self, m: BipedPlan) -> None:
         self._heard()
         self.plan = m
+
+    def _on_biped(self, m: BipedStatus) -> None:
+        self._heard()
+        self.biped = m
 
     def _on_servos(self, m: ServoStatus) -> None:
         self._heard()

@@ -45,6 +45,8 @@ HEARTBEAT_HZ = 5.0
 DRAW_HZ = 5.0
 # A clicked goal counts as reached within this distance [m].
 GOAL_TOLERANCE_M = 0.1
+# A goal given before the robot answers is sent this many times at most, a second apart.
+PENDING_GOAL_TRIES = 10
 DIRECTIONS = {"forward": 0.0, "left": 90.0, "back": 180.0, "right": -90.0}
 
 
@@ -91,13 +93,18 @@ class Station:
         )
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.robot = RobotView()
-        self.mode = Mode.TORQUE_OFF
+        # The biped walks the goals planned to while the station says walking.
+        self.mode = Mode.WALKING if biped else Mode.TORQUE_OFF
         self.direction_deg = 0.0
         self.speed = 0.0
         self.goal: tuple[float, float] | None = None
         self._dirty = True
         self._next_beat = 0.0
         self._next_draw = 0.0
+        self.pending_goal: tuple[float, float] | None = None  # sent once the robot is heard
+        self.answered = True  # whether the last service asked answered (else: no reply)
+        self._goal_tries = 0
+        self._next_goal_try = 0.0
         self.page = PageView(self.server, biped)
         self._build_controls()
         self.page.add_readouts()
@@ -133,6 +140,9 @@ class Station:
                 ):
                     button = gui.add_button(label)
                     button.on_click(lambda _event, s=service: self.call(s, Trigger()))
+                for label, mode in (("stop walking", Mode.TORQUE_OFF), ("walk", Mode.WALKING)):
+                    button = gui.add_button(label)
+                    button.on_click(lambda _event, mode=mode: self._set_mode(mode))
                 self.biped_text = gui.add_markdown("**biped:** click the ground to plan to it")
         self.server.scene.add_grid("/ground", width=6.0, height=6.0, position=(2.0, 0.0, 0.0))
 
@@ -162,23 +172,37 @@ class Station:
         self.speed = 0.0
         self._changed()
 
-    def set_goal(self, xy: tuple[float, float]) -> None:
+    def set_goal(self, xy: tuple[float, float]) -> Ack:
         """Walk to a point on the ground (map frame) [m]; for the biped, plan to it."""
         self.server.scene.add_icosphere(
             "/goal", radius=0.03, color=(250, 200, 0), position=(xy[0], xy[1], 0.02)
         )
         if self.biped:
-            self.call("start_planning", PlanningGoal(xy[0], xy[1]))
-            return
+            return self.call("start_planning", PlanningGoal(xy[0], xy[1]))
         self.goal = (float(xy[0]), float(xy[1]))
         if self.navigator is not None:
             self.navigator.set_goal(self.goal)
         self._changed()
+        return Ack(True, f"walking to ({xy[0]:.2f}, {xy[1]:.2f})")
+
+    def _send_pending_goal(self, now: float) -> None:
+        """The goal given before the robot was heard, once it is (a few tries)."""
+        if self.pending_goal is None or now < self._next_goal_try:
+            return
+        if not math.isfinite(self.robot.last_heard):
+            return
+        self._goal_tries += 1
+        self._next_goal_try = now + 1.0
+        reply = self.set_goal(self.pending_goal)
+        if reply.ok or self.answered or self._goal_tries >= PENDING_GOAL_TRIES:
+            self.pending_goal = None  # walked, refused with a reason, or never answered
 
     def call(self, service: str, request: Message) -> Ack:
         """Ask one of the biped's services; the answer shows on the page."""
+        self.answered = False
         try:
             reply = self.bus.request(service, request, timeout=3.0)
+            self.answered = True
         except FootfallError as exc:
             reply = Ack(False, str(exc))
         if not isinstance(reply, Ack):
@@ -217,10 +241,14 @@ class Station:
         """Take in what arrived, send the command (changed or due) and redraw the page."""
         self.bus.spin()
         now = time.monotonic()
+        self._send_pending_goal(now)
         due = self._dirty or now >= self._next_beat or self.goal is not None
-        if due and not self.biped:  # the biped is driven through its services
+        if due:  # the biped's goals go through its services; it hears the mode alone
             stamp = time.time()
             self.bus.publish(ModeCommand.TOPIC, ModeCommand(self.mode, stamp))
+            self._dirty = False
+            self._next_beat = now + 1.0 / HEARTBEAT_HZ
+        if due and not self.biped:
             command = self.command()
             self.bus.publish(
                 WalkCommand.TOPIC,
@@ -232,8 +260,6 @@ class Station:
                     stamp,
                 ),
             )
-            self._dirty = False
-            self._next_beat = now + 1.0 / HEARTBEAT_HZ
         if now >= self._next_draw:
             self.draw(now)
             self._next_draw = now + 1.0 / DRAW_HZ
