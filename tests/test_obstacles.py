@@ -196,13 +196,14 @@ def _blocked(detection, xy) -> bool:
 
 @pytest.mark.parametrize("with_floor", [True, False])
 def test_an_l_shaped_wall_leaves_its_inside_free(with_floor):
-    """Two walls joined at a corner are one Euclidean cluster, but its circles hug the arms:
-    the floor inside the L stays free; every wall point stays covered."""
+    """Two walls joined at a corner are one obstacle, but its circles follow the arms (the
+    medial line): the floor inside the L stays free; every wall point stays covered."""
     rng = np.random.default_rng(10)
     walls = np.vstack([_wall(rng, (0, 0), (2, 0)), _wall(rng, (0, 0), (0, 2))])
     cloud = np.vstack([_floor(rng, (-1, -1), (3, 3), 20000), walls]) if with_floor else walls
     detection = detect_obstacles(cloud, "map", DetectionConfig(ground="plane"))
-    assert len({c.component for c in detection.clusters}) == 1 < len(detection.clusters)
+    assert len(detection.clusters) == 1 and len(detection.circles) > 8
+    assert max(c.r for c in detection.circles) < 0.2
     for xy in [(0.4, 0.4), (1.0, 1.0), (1.5, 0.5), (0.5, 1.5), (1.8, 1.8)]:
         assert not _blocked(detection, xy), xy
     for xy in [(0.5, 0.0), (1.9, 0.0), (0.0, 1.0), (0.0, 0.0)]:

@@ -8,7 +8,8 @@ slope is ever infinite). Each waypoint grows a branch of a binary tree; the tree
 searched recursively (the path to a waypoint and from it are planned the same way), a
 waypoint that falls inside another obstacle is moved round that obstacle (on the same
 side; this walks along a chain of overlapping circles) or pruned, and the shortest complete
-branch wins.
+branch wins. Where no branch of the bounded tree arrives (a route out of a room and back
+round its walls), a grid route round the circles is taken (:mod:`footfall.biped.grid_route`).
 
 The obstacle avoided first is the blocking one met first along the segment (the
 dissertation picks by distance to the segment, eqs. 89-92; the first one met is the one
@@ -258,6 +259,10 @@ def plan_path(
         return best
 
     path = search(s, g, 0)
+    if path is None:  # too many nested detours for the tree (the walls of a room)
+        from footfall.biped.grid_route import grid_route
+
+        path = grid_route(s, g, obstacles)
     if path is None:
         raise PlanningError(
             f"no path from ({s[0]:.2f}, {s[1]:.2f}) to ({g[0]:.2f}, {g[1]:.2f}): every branch of "

@@ -7,8 +7,9 @@ height and pitch or plane coefficients, the dissertation's "ground plane approac
 the floor RANSAC finds near the expected up axis), and are grouped by Euclidean cluster
 extraction (tolerance 0.30 m, at least 5 points) in memory linear in the points. Each
 cluster gets its centroid and a box aligned with its principal axes (PCA in the ground
-plane), which becomes one circle or a chain of circles (eqs. 79-81); clusters whose
-circles would cover free floor are split (:mod:`footfall.biped.cluster_split`). The
+plane), which becomes one circle or a chain of circles (eqs. 79-81); a cluster whose box's
+circles would cover free floor (a wall, an L, a room) is covered by circles along its
+medial line instead (:mod:`footfall.biped.cluster_cover`). The
 inverted-cone detector of Manduchi et al. (eqs. 71-72) is the alternative to ground removal.
 
 Errata: eqs. 76-78 rotate by +90 degrees, which maps the optical frame's x right and y down
@@ -21,15 +22,19 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from footfall.biped.avoidance import Circle
-from footfall.biped.cluster_split import FreeFloorGrid, split_cluster
-from footfall.biped.maps import box_circles
+from footfall.biped.cluster_cover import (
+    FreeFloorGrid,
+    ObstacleCluster,
+    cover_cluster,
+    describe_cluster,
+)
 from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError, DatasetError
 from footfall.pointcloud.filters import (
@@ -61,16 +66,21 @@ class DetectionConfig:
         ground_max_tilt_deg: Largest angle between the ground's normal and the expected up
             axis [deg]; None: 15 when the up axis is known (a map-frame cloud, a camera
             pose given), 50 for the guess of a level camera.
-        min_ground_fraction: Smallest share of the points a ground candidate must hold.
+        min_ground_fraction: Smallest share of the points a ground candidate must hold (a
+            floor seen between furniture may hold only a few per cent).
+        min_ground_extent: Least spread of the ground's points in both directions [m].
+        camera_height_range: Plausible heights of a camera over its floor [m]: a
+            camera-frame cloud's ground is the lowest large level plane this far below it.
         cluster_tolerance: Euclidean clustering radius [m].
         min_cluster_size: Smallest cluster kept [points, after the voxel grid].
         cone_min_height: ``H_min`` of eq. 71 [m].
         cone_max_height: ``H_max`` of eq. 71 [m].
         cone_max_slope: ``theta_max`` of eq. 72 [rad].
-        split_free_fraction: Clusters whose circles cover free floor inside their box, away
-            from their points, of more than this share of their area are split; 1 never
-            splits.
-        split_cell: Cell side of the free-floor grid [m].
+        floor_cell: Cell side of the free-floor grid [m].
+        medial_min_gain_m2: A cluster's circles follow its medial line when they leave this
+            much more floor free than its box's circles (and at least half of what those
+            cover) [m^2]; infinite keeps every box's circles.
+        medial_min_radius: Smallest circle along a medial line [m].
     """
 
     max_depth: float = 5.0
@@ -82,14 +92,17 @@ class DetectionConfig:
     ransac_threshold: float = 0.02
     ransac_iterations: int = 200
     ground_max_tilt_deg: float | None = None
-    min_ground_fraction: float = 0.05
+    min_ground_fraction: float = 0.02
+    min_ground_extent: float = 0.5
+    camera_height_range: tuple[float, float] = (0.1, 3.0)
     cluster_tolerance: float = 0.30
     min_cluster_size: int = 5
     cone_min_height: float = 0.05
     cone_max_height: float = 1.0
     cone_max_slope: float = math.radians(45.0)
-    split_free_fraction: float = 0.1
-    split_cell: float = 0.05
+    floor_cell: float = 0.05
+    medial_min_gain_m2: float = 0.1
+    medial_min_radius: float = 0.075
 
     def __post_init__(self) -> None:
         if self.ground == "cone":  # the singular, as earlier versions spelt it
@@ -103,6 +116,7 @@ class DetectionConfig:
             cluster_tolerance=self.cluster_tolerance,
             min_cluster_size=self.min_cluster_size,
             max_depth=self.max_depth,
+            medial_min_radius=self.medial_min_radius,
         )
         require_non_negative("obstacle detection", voxel_size=self.voxel_size)
         if not self.max_obstacle_height > self.ground_clearance:
@@ -113,43 +127,23 @@ class DetectionConfig:
         tilt = self.ground_max_tilt_deg
         if tilt is not None and not 0 < tilt < 90:
             raise ConfigError(f"ground tilt tolerance must lie in (0, 90) degrees, got {tilt}")
+        low, high = self.camera_height_range
+        if not (math.isfinite(high) and 0 <= low < high):
+            raise ConfigError(
+                f"the camera height range must be two finite heights, low to high, got "
+                f"{self.camera_height_range}"
+            )
+        require_non_negative("obstacle detection", min_ground_extent=self.min_ground_extent)
+        if not self.medial_min_gain_m2 >= 0:  # infinite: the dissertation's circles always
+            raise ConfigError(
+                f"medial_min_gain_m2 must be a number >= 0, got {self.medial_min_gain_m2!r}"
+            )
 
     def tilt_rad(self, up_known: bool) -> float:
         """The ground's tilt tolerance [rad]."""
         if self.ground_max_tilt_deg is not None:
             return math.radians(self.ground_max_tilt_deg)
         return math.radians(15.0 if up_known else 50.0)
-
-
-@dataclass(frozen=True)
-class ObstacleCluster:
-    """One detected obstacle.
-
-    Attributes:
-        centroid: Mean of its points, shape (3,) [m].
-        centre: Centre of its principal-axes box in the ground plane, shape (2,) [m].
-        width: Box extent along the first principal axis [m].
-        depth: Box extent along the second [m].
-        height: Vertical extent [m].
-        yaw: Heading of the first principal axis [rad].
-        points: How many points it has.
-        circles: Its circles (eqs. 79-81), not inflated.
-        empty_fraction: Share of its circles' area that holds no obstacle point.
-        free_floor_fraction: Share of its circles' area seen to be free floor.
-        component: Index of the Euclidean cluster it was split from.
-    """
-
-    centroid: npt.NDArray[np.float64]
-    centre: npt.NDArray[np.float64]
-    width: float
-    depth: float
-    height: float
-    yaw: float
-    points: int
-    circles: tuple[Circle, ...] = field(default=())
-    empty_fraction: float = 0.0
-    free_floor_fraction: float = 0.0
-    component: int = 0
 
 
 def camera_to_map(
@@ -171,26 +165,6 @@ def camera_to_map(
     )
     rotation = Rotation.from_euler("xyz", np.asarray(robot_rpy, dtype=np.float64))
     return rotation.apply(p) + np.asarray(robot_position, dtype=np.float64)
-
-
-def describe_cluster(points: npt.NDArray[np.float64]) -> ObstacleCluster:
-    """Centroid, principal-axes box in the ground plane and circles of one cluster."""
-    centroid = points.mean(axis=0)
-    xy = points[:, :2] - centroid[:2]
-    if len(points) >= 2 and np.ptp(xy, axis=0).max() > 1e-9:
-        _, vectors = np.linalg.eigh(np.cov(xy.T))
-        axis = vectors[:, -1]  # the principal direction
-    else:
-        axis = np.array([1.0, 0.0])
-    yaw = math.atan2(axis[1], axis[0])
-    frame = np.array([axis, [-axis[1], axis[0]]])
-    local = xy @ frame.T
-    lo, hi = local.min(axis=0), local.max(axis=0)
-    width, depth = max(float(hi[0] - lo[0]), 0.01), max(float(hi[1] - lo[1]), 0.01)
-    centre = centroid[:2] + 0.5 * (lo + hi) @ frame
-    height = float(np.ptp(points[:, 2]))
-    circles = tuple(box_circles(centre, width, depth, yaw))
-    return ObstacleCluster(centroid, centre, width, depth, height, yaw, len(points), circles)
 
 
 @dataclass(frozen=True)
@@ -265,6 +239,8 @@ def _to_map(
             c.min_ground_fraction,
             rng=rng,
             below_origin=True,
+            height_range_m=c.camera_height_range,
+            min_extent_m=c.min_ground_extent,
         )
         floor = CameraOverFloor.from_up(found.normal, found.offset_m)
         in_camera = GroundPlane(
@@ -352,6 +328,7 @@ def detect_obstacles(
             c.ransac_iterations,
             c.min_ground_fraction,
             rng=rng,
+            min_extent_m=c.min_ground_extent,
         )
     else:
         ground = _known_plane(p, c, 0.0)
@@ -365,13 +342,13 @@ def detect_obstacles(
         keep = (height > c.ground_clearance) & below_overhead
         floor_points = np.abs(height) <= max(c.ransac_threshold, 0.5 * c.ground_clearance)
     kept = p[keep]
-    grid = FreeFloorGrid.build(kept[:, :2], p[floor_points, :2], c.split_cell)
+    grid = FreeFloorGrid.build(kept[:, :2], p[floor_points, :2], c.floor_cell)
     clusters: list[ObstacleCluster] = []
     for component, idx in enumerate(
         euclidean_clusters(kept, c.cluster_tolerance, c.min_cluster_size)
     ):
-        parts = split_cluster(
-            kept[idx], grid, describe_cluster, c.split_free_fraction, c.min_cluster_size
+        parts = cover_cluster(
+            kept[idx], grid, describe_cluster, c.medial_min_gain_m2, c.medial_min_radius
         )
         clusters.extend(replace(part, component=component) for part in parts)
     detect_ms = 1000.0 * (time.perf_counter() - started)

@@ -109,6 +109,15 @@ def add_cloud_options(p: argparse.ArgumentParser) -> None:
         help="the floor a x + b y + c z + d = 0 in the camera frame (m)",
     )
     p.add_argument(
+        "--camera-height-range",
+        type=float,
+        nargs=2,
+        metavar=("MIN", "MAX"),
+        default=(0.1, 3.0),
+        help="with no pose given, the heights (m) the camera may stand over its floor: the "
+        "ground is the lowest large level plane this far below it",
+    )
+    p.add_argument(
         "--voxel-size", type=float, default=0.02, help="voxel grid side in m (0: every point)"
     )
     p.add_argument(
@@ -135,6 +144,7 @@ def cloud_request(args: argparse.Namespace):
         camera_pitch_deg=args.camera_pitch_deg,
         camera_roll_deg=args.camera_roll_deg,
         ground_plane=None if args.ground_plane is None else tuple(args.ground_plane),
+        camera_height_range=tuple(args.camera_height_range),
         voxel_size=args.voxel_size,
         max_obstacle_height=args.max_obstacle_height,
         cluster_tolerance=args.cluster_tolerance,

@@ -18,8 +18,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         description=(
             "Detect obstacles in a point cloud (dissertation §6.3.1): pass-through filter, voxel "
             "grid, ground removal, Euclidean clustering, principal-axes boxes and circles "
-            "(split where they would cover free floor). Writes obstacles.json and "
-            "obstacles.png (top view) to --out."
+            "(along the obstacle's medial line where a box's would cover free floor). Writes "
+            "obstacles.json and obstacles.png (top view) to --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )

@@ -22,6 +22,14 @@ import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from footfall.errors import ConfigError, DatasetError
+from footfall.pointcloud.planes import (
+    AREA_CELL_M,
+    LAYER_PARALLEL_DEG,
+    best_plane,
+    cells_covered,
+    lowest_layer,
+    plane_extent_m,
+)
 
 # Optical camera frame (x right, y down, z forward) -> level body (x forward, y left, z up).
 OPTICAL_TO_BASE = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
@@ -155,53 +163,6 @@ def _angle_deg(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64]) -> float:
     return math.degrees(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
 
 
-def _best_plane(
-    points: npt.NDArray[np.float64],
-    up: npt.NDArray[np.float64],
-    cos_tilt: float,
-    threshold: float,
-    iterations: int,
-    rng: np.random.Generator,
-    below_origin: bool,
-) -> tuple[npt.NDArray[np.float64], float] | None:
-    """The best-supported plane within the tilt tolerance, refined by least squares."""
-    score_on = points if len(points) <= 20000 else points[rng.choice(len(points), 20000, False)]
-    best: tuple[npt.NDArray[np.float64], float] | None = None
-    best_count = 0
-    accepted = 0
-    for _ in range(20 * iterations):  # hypotheses too steep do not count, up to a limit
-        a, b, c = points[rng.choice(len(points), 3, replace=False)]
-        normal = np.cross(b - a, c - a)
-        norm = np.linalg.norm(normal)
-        if norm < 1e-12:
-            continue
-        normal /= norm
-        if normal @ up < 0:
-            normal = -normal
-        if normal @ up < cos_tilt:
-            continue
-        d = -float(normal @ a)
-        if below_origin and d <= 0:  # a ceiling, not a floor: the sensor is under it
-            continue
-        count = int(np.count_nonzero(np.abs(score_on @ normal + d) < threshold))
-        if count > best_count:
-            best, best_count = (normal, d), count
-        accepted += 1
-        if accepted >= iterations:
-            break
-    if best is None:
-        return None
-    normal, d = best
-    inliers = np.abs(points @ normal + d) < threshold
-    if inliers.sum() >= 3:
-        centre = points[inliers].mean(axis=0)
-        refined = np.linalg.svd(points[inliers] - centre, full_matrices=False)[2][-1]
-        refined = refined if refined @ up >= 0 else -refined
-        if refined @ up >= cos_tilt and not (below_origin and refined @ centre >= 0):
-            normal, d = refined, -float(refined @ centre)
-    return normal, d
-
-
 def find_ground(
     points: npt.ArrayLike,
     up: npt.ArrayLike,
@@ -213,13 +174,19 @@ def find_ground(
     rng: np.random.Generator | None = None,
     below_origin: bool = False,
     parallel_deg: float = 10.0,
+    height_range_m: tuple[float, float] | None = None,
+    min_extent_m: float = 0.0,
 ) -> GroundPlane:
-    """The floor: the lowest well-supported plane whose normal is near ``up``.
+    """The floor: the lowest large plane whose normal is near ``up``.
 
     Planes are extracted one after another (RANSAC, each refined by least squares on its
     inliers, whose points then leave), as long as each holds at least ``min_fraction`` of
     the points. Of those parallel to the first, best-supported one, the one whose inliers
-    lie lowest (median height along its normal) is the floor.
+    lie lowest (median height along its normal) is the floor, and below it the search goes
+    on: a floor seen between furniture may hold only a few per cent of the points, under
+    a desk top or a bed that holds many more. A plane counts when it holds
+    ``min_fraction``, spreads ``min_extent_m`` both ways and (below the origin) puts the
+    origin within ``height_range_m`` above it.
 
     Args:
         points: Shape (n, 3) [m].
@@ -234,9 +201,14 @@ def find_ground(
             origin is the camera: its floor lies below it, a ceiling above).
         parallel_deg: Candidates more than this far from parallel to the best-supported
             one do not compete [deg].
+        height_range_m: With ``below_origin``, the plausible heights of the origin (the
+            camera) above the floor [m]; None: any.
+        min_extent_m: Least spread of a floor's inliers in both directions of its plane
+            (10th to 90th percentile) [m].
 
     Raises:
-        DatasetError: Fewer than 3 points, or no plane within the tolerance of ``up``.
+        DatasetError: Fewer than 3 points, or no plausible plane within the tolerance of
+            ``up``.
     """
     p = np.asarray(points, dtype=np.float64)
     u = _unit(up, "the up axis")
@@ -248,17 +220,31 @@ def find_ground(
         )
     rng = rng or np.random.default_rng(0)
     cos_tilt = math.cos(max_tilt_rad)
+    enough = min_fraction * len(p)
+
+    def plausible(inliers, normal, d, under: bool = False) -> bool:
+        """In the height range, and large.
+
+        A plane found under a better-supported one spreads ``min_extent_m``; one of the
+        best-supported, that much or a quarter of the view (a close-up of a table top).
+        """
+        if below_origin and height_range_m is not None:
+            if not height_range_m[0] <= d <= height_range_m[1]:
+                return False
+        least = min_extent_m if under else min(min_extent_m, 0.25 * plane_extent_m(p, normal))
+        return plane_extent_m(inliers, normal) >= least
+
     remaining = p
     candidates: list[tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], float]] = []
     for _ in range(max_planes):
         if len(remaining) < 3:
             break
-        plane = _best_plane(remaining, u, cos_tilt, threshold_m, iterations, rng, below_origin)
+        plane = best_plane(remaining, u, cos_tilt, threshold_m, iterations, rng, below_origin)
         if plane is None:
             break
         normal, d = plane
         inliers = np.abs(remaining @ normal + d) < threshold_m
-        if inliers.sum() < min_fraction * len(p):
+        if inliers.sum() < enough:
             break
         candidates.append((remaining[inliers], normal, d))
         remaining = remaining[~inliers]
@@ -268,12 +254,33 @@ def find_ground(
             f"holds {min_fraction:.0%} of the points: give the camera's pitch and roll "
             "(--camera-pitch-deg, --camera-roll-deg) or the plane (--ground-plane A B C D)"
         )
-    # Heights along the best-supported plane's normal: the prior's up may be far off (a
-    # camera pitched down with no pose given), and along it a higher plane can look lower.
-    # Only surfaces level with it compete (the floor under a table top is parallel to it;
-    # a slanted patch of background is not).
-    reference = candidates[0][1]
-    level = [c for c in candidates if c[1] @ reference >= math.cos(math.radians(parallel_deg))]
-    _, normal, d = min(level, key=lambda c: float(np.median(c[0] @ reference)))
+    # Heights along the level surfaces' normal: the prior's up may be far off (a camera
+    # pitched down with no pose given), and along it a higher plane can look lower. The
+    # reference is the candidate that covers the most ground (cells of ``AREA_CELL_M``): a
+    # plane through the feet of walls and furniture, or across the tops of several, can
+    # hold as many points as a floor or a table top, but in strips. Only surfaces level
+    # with it compete.
+    reference = max(candidates, key=lambda c: cells_covered(c[0], c[1], AREA_CELL_M))[1]
+    cos_parallel = math.cos(math.radians(parallel_deg))
+    level = [c for c in candidates if c[1] @ reference >= cos_parallel]
+    usable = [c for c in level if plausible(*c)]
+    lowest = min(usable, key=lambda c: float(np.median(c[0] @ reference)), default=None)
+    cos_layer = math.cos(math.radians(LAYER_PARALLEL_DEG))
+    found = lowest_layer(p, lowest, reference, cos_layer, threshold_m, below_origin, enough,
+                          plausible)  # fmt: skip
+    if found is not None:
+        lowest = found
+        level.append(found)
+    if lowest is None:
+        where = ""
+        if below_origin and height_range_m is not None:
+            where = f" {height_range_m[0]:g} to {height_range_m[1]:g} m below the camera"
+        raise DatasetError(
+            f"no plane{where} within {math.degrees(max_tilt_rad):.0f} deg of the expected up "
+            f"axis holds {min_fraction:.0%} of the points over {min_extent_m:g} m both ways: "
+            "give the camera's pitch and roll (--camera-pitch-deg, --camera-roll-deg) or the "
+            "plane (--ground-plane A B C D)"
+        )
+    _, normal, d = lowest
     fraction = float(np.count_nonzero(np.abs(p @ normal + d) < threshold_m)) / len(p)
     return GroundPlane(normal, d, fraction, _angle_deg(normal, u), len(level))

@@ -27,6 +27,7 @@ class CloudRequest:
         camera_pitch_deg: How far the camera looks down [deg]; None when not known.
         camera_roll_deg: How far its right side dips [deg]; None when not known.
         ground_plane: The floor ``a x + b y + c z + d = 0`` in the camera frame.
+        camera_height_range: Heights the camera may stand over its floor [m].
         voxel_size: Voxel grid side [m].
         max_obstacle_height: Points higher above the floor are overhead [m].
         cluster_tolerance: Euclidean clustering radius [m].
@@ -40,6 +41,7 @@ class CloudRequest:
     camera_pitch_deg: float | None = None
     camera_roll_deg: float | None = None
     ground_plane: tuple[float, float, float, float] | None = None
+    camera_height_range: tuple[float, float] = (0.1, 3.0)
     voxel_size: float = 0.02
     max_obstacle_height: float = 2.0
     cluster_tolerance: float = 0.30
@@ -63,6 +65,7 @@ def detect(request: CloudRequest) -> Detection:
         max_obstacle_height=request.max_obstacle_height,
         cluster_tolerance=request.cluster_tolerance,
         min_cluster_size=request.min_cluster_size,
+        camera_height_range=request.camera_height_range,
     )
     if request.frame == "map" and (request.camera() or request.ground_plane) is not None:
         raise ConfigError("a camera pose or --ground-plane only applies to a camera-frame cloud")
