@@ -31,6 +31,32 @@ def test_every_test_map_gets_a_collision_free_near_optimal_plan(number):
     assert plan.path.length <= 1.02 * shortest_path_length(m.start, m.goal, m.inflated)
 
 
+# Each map's plan as the dissertation's method (the tangent tree) makes it: path length [m],
+# footsteps, waypoints. A change to the obstacles or the planner must leave them as they are.
+DISSERTATION_PLANS = {
+    1: (3.479969, 36, 3),
+    2: (3.239344, 33, 4),
+    3: (4.090792, 34, 3),
+    4: (3.609604, 33, 3),
+    5: (5.727003, 49, 4),
+    6: (5.160233, 45, 3),
+    7: (5.396905, 43, 3),
+    8: (4.535561, 37, 3),
+    9: (3.191583, 32, 3),
+    10: (5.09902, 38, 2),
+    11: (5.831355, 51, 4),
+}
+
+
+@pytest.mark.parametrize("number", TEST_CASES)
+def test_the_test_maps_plan_as_the_dissertation_does(number):
+    """The 11 maps keep their plans: the same path length, footsteps and waypoints."""
+    plan = plan_walk(dissertation_map(number))
+    length, footsteps, waypoints = DISSERTATION_PLANS[number]
+    assert plan.path.length == pytest.approx(length, abs=1e-6)
+    assert (len(plan.footsteps.positions), len(plan.path.waypoints)) == (footsteps, waypoints)
+
+
 @given(st.integers(0, 2**32 - 1), st.integers(5, 30))
 @example(seed=1, count=23)  # a sub-path that failed deep in the tree was reused shallower
 @settings(max_examples=40, deadline=None)

@@ -77,9 +77,8 @@ def grid_route(
     cells = [gi * shape[1] + gj]
     while parent.flat[cells[-1]] >= 0:
         cells.append(int(parent.flat[cells[-1]]))
-    flat = np.array(cells[::-1])
-    points = np.column_stack([x[flat // shape[1]], y[flat % shape[1]]])
-    points[0], points[-1] = s, g
+    flat = np.array(cells[::-1])[1:-1]  # the cells between the ends' own
+    points = np.vstack([s, np.column_stack([x[flat // shape[1]], y[flat % shape[1]]]), g])
     route = [points[0]]
     anchor, k = 0, 1
     while k < len(points) - 1:  # pull taut: keep the last point in sight of the anchor

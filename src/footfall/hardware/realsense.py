@@ -258,8 +258,8 @@ class RealSenseStream:
                     frame = step.process(frame)
                 profile = frame.get_profile().as_video_stream_profile()
                 units = depth_units(frame.as_depth_frame().get_units())
-                with self._lock:
-                    color, self._color = self._color, None
+                with self._lock:  # the newest colour image: its sensor runs on its own thread,
+                    color = self._color  # so this instant's may come just after the depth
                 image = DepthImage(
                     seconds,
                     int(frame.get_frame_number()),

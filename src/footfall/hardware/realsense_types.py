@@ -45,7 +45,8 @@ class DepthImage:
         depth: Shape (height, width) ``uint16`` depth units; 0 where nothing was measured.
         depth_scale: Metres per depth unit.
         camera: The depth stream's intrinsics (after decimation).
-        color: The colour image taken with it, shape (height, width, 3) RGB, if any.
+        color: The newest colour image when it was taken (colour streams on its own
+            thread: the same instant's or the one before), shape (height, width, 3) RGB.
     """
 
     device_time: float

@@ -23,7 +23,6 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
 from footfall.biped.body import SIDES, load_biped_spec
@@ -36,18 +35,17 @@ from footfall.errors import FootfallError
 from footfall.messages import BipedStatus, Mode, ModeCommand
 from footfall.nodes.biped_planning import BipedPlanningNode
 from footfall.runtime.bus import Bus
-from footfall.sim.biped_model import biped_mjcf, camera_mount
 from footfall.sim.biped_room import Room
 from footfall.sim.biped_run import (
     body_plan_map,
     gait_config,
-    ideal_feet,
     near_goal,
+    stand_in_room,
     standing_feet,
     truncate_path,
 )
 from footfall.sim.biped_sim import BipedSimulation
-from footfall.sim.biped_walk import CONTROL_PERIOD, PatternRunner, StabiliserConfig, stand
+from footfall.sim.biped_walk import CONTROL_PERIOD, PatternRunner, StabiliserConfig
 
 # The robot walks only while the station's mode command is this fresh [s].
 COMMAND_TIMEOUT = 0.5
@@ -272,12 +270,7 @@ class WalkingBiped:
         from footfall.sim.camera import SimDepthCamera
 
         spec = load_biped_spec(spec_name)
-        mount = camera_mount(spec)
-        model = mujoco.MjModel.from_xml_string(biped_mjcf(spec, room.obstacles, mount))
-        sim = BipedSimulation(spec, model)
-        limits = PlanMap(room.name, room.start, room.goal, ()).limits
-        z_c = stand(sim, ideal_feet(room.start, 0.0, limits.width))
-        lipm = LipmConfig(com_height=z_c)
+        model, sim, mount, _, z_c, lipm = stand_in_room(room, spec)
         camera = SimDepthCamera(model, mount)
 
         def where() -> tuple[float, float]:

@@ -20,6 +20,7 @@ import itertools
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -27,7 +28,12 @@ import numpy.typing as npt
 
 from footfall.biped.avoidance import AvoidancePath, Circle
 from footfall.biped.body import SIDES, BipedSpec, load_biped_spec, mean_heading
-from footfall.biped.footsteps import Footsteps, footsteps_from_parameters, plan_footsteps
+from footfall.biped.footsteps import (
+    Footsteps,
+    StepLimits,
+    footsteps_from_parameters,
+    plan_footsteps,
+)
 from footfall.biped.gait import GaitConfig, GaitPattern, gait_pattern
 from footfall.biped.lipm import LipmConfig, WalkParameter, lipm_pattern
 from footfall.biped.maps import FOOT_LENGTH, PlanMap, dissertation_map, load_map
@@ -37,6 +43,7 @@ from footfall.sim.biped_model import Obstacle, biped_mjcf, camera_mount
 from footfall.sim.biped_room import Room, make_room
 from footfall.sim.biped_sim import BipedSimulation
 from footfall.sim.biped_walk import BipedRun, StabiliserConfig, run_pattern, stand
+from footfall.sim.model import CameraMount
 
 OBSTACLE_HEIGHT = 0.5  # cylinders standing for a map's circles [m]
 CLEARANCE = 0.05  # margin between the body's reach and an obstacle [m]
@@ -257,16 +264,36 @@ def truncate_path(waypoints: npt.NDArray[np.float64], length: float) -> npt.NDAr
     return np.array(out)
 
 
-def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWalk:
-    """Look, plan, walk a stretch, repeat: the room seen only through the head camera."""
-    from footfall.sim.biped_look import look
+class RoomStand(NamedTuple):
+    """Archie standing at a room's start.
 
+    Its model, simulation and head camera's mount, the step limits, the COM's height and
+    the pendulum's settings.
+    """
+
+    model: mujoco.MjModel
+    sim: BipedSimulation
+    mount: CameraMount
+    limits: StepLimits
+    z_c: float
+    lipm: LipmConfig
+
+
+def stand_in_room(room: Room, spec: BipedSpec) -> RoomStand:
+    """Build the room with Archie in it and stand him at its start, facing +x."""
     mount = camera_mount(spec)
     model = mujoco.MjModel.from_xml_string(biped_mjcf(spec, room.obstacles, mount))
     sim = BipedSimulation(spec, model)
     limits = PlanMap(room.name, room.start, room.goal, ()).limits
     z_c = stand(sim, ideal_feet(room.start, 0.0, limits.width))
-    lipm = LipmConfig(com_height=z_c)
+    return RoomStand(model, sim, mount, limits, z_c, LipmConfig(com_height=z_c))
+
+
+def walk_room(room: Room, spec: BipedSpec, request: WalkBipedRequest) -> BipedWalk:
+    """Look, plan, walk a stretch, repeat: the room seen only through the head camera."""
+    from footfall.sim.biped_look import look
+
+    model, sim, mount, limits, z_c, lipm = stand_in_room(room, spec)
     seen: list[Circle] = []
     segments: list[Segment] = []
     no_route = None
