@@ -59,6 +59,17 @@ def test_walk_writes_metrics_and_plot(tmp_path, capsys):
     } <= metrics.keys()
     printed = capsys.readouterr().out
     assert "walk summary" in printed and str(out / "metrics.json") in printed
+    # What each node cost: footfall's own, and the simulator's under names from "sim".
+    cpu = metrics["cpu_per_node"]
+    assert {"mapping", "movement", "servo", "pose_guard", "sim_camera", "sim_physics"} <= set(cpu)
+    assert all(seconds >= 0 for seconds in cpu.values()) and cpu["mapping"] > 0
+    own = sum(s for name, s in cpu.items() if not name.startswith("sim"))
+    assert metrics["cpu_own_share"] == pytest.approx(own / metrics["sim_seconds"])
+    assert (
+        metrics["nodes"]["mapping"]["latency_p95_ms"]
+        >= metrics["nodes"]["mapping"]["latency_median_ms"]
+        > 0
+    )
 
 
 def test_walk_with_a_robot_file(tmp_path):

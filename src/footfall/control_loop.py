@@ -32,6 +32,7 @@ from footfall.motion.walker import WalkController
 from footfall.nodes.movement import MovementNode
 from footfall.nodes.servo import ServoNode
 from footfall.runtime.bus import Bus, InProcessBus
+from footfall.runtime.cpu_meter import CpuMeter, MeteredBus
 from footfall.runtime.scheduler import SimulatedScheduler
 
 
@@ -168,6 +169,7 @@ class WalkingGraph:
     movement: MovementNode
     servo: ServoNode
     recorder: WalkRecorder
+    meter: CpuMeter = field(default_factory=CpuMeter)
 
     @classmethod
     def build(
@@ -177,24 +179,41 @@ class WalkingGraph:
         controller: WalkController,
         command_timeout: float | None = None,
         log_ticks: int | None = None,
+        meter: CpuMeter | None = None,
     ) -> WalkingGraph:
         """Wire the movement and servo nodes and a recorder on ``bus``.
 
-        The recorder keeps the latest ``log_ticks`` rows, or every row when None.
+        The recorder keeps the latest ``log_ticks`` rows, or every row when None; each
+        node's work is charged to it on ``meter`` (the backend's physics to ``sim_physics``,
+        the recorder to ``sim_record``).
         """
-        recorder = WalkRecorder(bus, log_ticks)
-        movement = MovementNode(bus, controller, command_timeout=command_timeout)
-        servo = ServoNode(bus, controller.spec, backend, stand_height=controller.height)
+        meter = meter if meter is not None else CpuMeter()
+        recorder = WalkRecorder(MeteredBus(bus, meter, "sim_record"), log_ticks)
+        movement = MovementNode(
+            MeteredBus(bus, meter, "movement"), controller, command_timeout=command_timeout
+        )
+        servo = ServoNode(
+            MeteredBus(bus, meter, "servo"),
+            controller.spec,
+            backend,
+            stand_height=controller.height,
+        )
         servo.publish_state()
-        return cls(bus, backend, movement, servo, recorder)
+        return cls(bus, backend, movement, servo, recorder, meter)
 
     def step(self, t: float, dt: float) -> None:
         """One control tick at ``t``, then the robot advances ``dt`` [s] and reports."""
-        self.movement.tick(t)
-        self.servo.tick(t, dt)
-        self.backend.advance(dt)
-        self.servo.publish_state()
-        self.recorder.record(t + dt)
+        measure = self.meter.measure
+        with measure("movement"):
+            self.movement.tick(t)
+        with measure("servo"):
+            self.servo.tick(t, dt)
+        with measure("sim_physics"):
+            self.backend.advance(dt)
+        with measure("servo"):
+            self.servo.publish_state()
+        with measure("sim_record"):
+            self.recorder.record(t + dt)
 
 
 def run_control_loop(

@@ -44,6 +44,7 @@ from footfall.planning.traversability import CostGrid, cost_grid, span_radius, w
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus
+from footfall.runtime.cpu_meter import CpuMeter, MeteredBus
 
 # Replan times kept for the timing figures.
 TIMING_HISTORY = 10_000
@@ -130,6 +131,7 @@ class NavigatorNode:
         goal_in_world: Goal ``(x, y)`` [m]; None until :meth:`set_goal`.
         config: Settings.
         background: Replan on a worker thread (see the module docstring).
+        meter: Charged with the node's work, on either thread.
     """
 
     name = "navigation"
@@ -141,8 +143,10 @@ class NavigatorNode:
         goal_in_world: tuple[float, float] | None = None,
         config: NavigationConfig | None = None,
         background: bool = False,
+        meter: CpuMeter | None = None,
     ) -> None:
         self.bus = bus
+        self.meter = meter if meter is not None else CpuMeter()
         self.config = config or NavigationConfig()
         self.span_radius_m = span_radius(spec)
         self.goal: tuple[float, float] | None = None
@@ -163,7 +167,7 @@ class NavigatorNode:
         self._walls = WallMemory()
         self._pool = ThreadPoolExecutor(max_workers=1) if background else None
         self._pending: Future[PlanOutcome] | None = None
-        bus.subscribe(MapUpdate.TOPIC, self._on_map, last=True)
+        MeteredBus(bus, self.meter, self.name).subscribe(MapUpdate.TOPIC, self._on_map, last=True)
         if goal_in_world is not None:
             self.set_goal(goal_in_world)
 
@@ -240,10 +244,15 @@ class NavigatorNode:
         if self._pool is None:
             self._take(self._plan(update, pose, goal, t), t)
         else:
-            self._pending = self._pool.submit(self._plan, update, pose, goal, t)
+            plan = self.meter.wrap(self.name, self._plan)  # timed on the worker's thread
+            self._pending = self._pool.submit(plan, update, pose, goal, t)
 
     def command(self, t: float, status: GaitStatus, base: WalkCommand) -> WalkCommand:
         """The walk command at time ``t`` [s] for the robot's status, at ``base``'s speed."""
+        with self.meter.measure(self.name):
+            return self._command(t, status, base)
+
+    def _command(self, t: float, status: GaitStatus, base: WalkCommand) -> WalkCommand:
         pose = status.body_pose
         if self.stuck.watch(t, status, self._last_command, self._map):
             self._force = True

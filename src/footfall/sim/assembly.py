@@ -11,7 +11,7 @@ import dataclasses
 import itertools
 import time
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -29,6 +29,7 @@ from footfall.planning.terrain_planner import TerrainPlanner
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus
+from footfall.runtime.cpu_meter import CpuMeter, MeteredBus
 from footfall.runtime.faults import FaultyLink
 from footfall.runtime.scheduler import WallClockScheduler
 from footfall.sim.task import TerrainTask
@@ -74,6 +75,9 @@ class WalkingRobot:
             physics step) [s].
         control_cpu_seconds: Its CPU time on this thread [s] (other processes on the
             machine do not change it).
+        meter: CPU time and latency per node (the simulator's under names from ``sim``).
+        camera_node: The camera source's name on the meter (``sim_camera`` for the
+            simulator's rendered camera).
     """
 
     spec: HexapodSpec
@@ -89,6 +93,8 @@ class WalkingRobot:
     simulated_until: float = 0.0
     control_seconds: float = 0.0
     control_cpu_seconds: float = 0.0
+    meter: CpuMeter = field(default_factory=CpuMeter)
+    camera_node: str = "camera"
 
     @classmethod
     def build(
@@ -100,6 +106,7 @@ class WalkingRobot:
         command_timeout: float | None = None,
         color: bool = False,
         log_ticks: int | None = None,
+        meter: CpuMeter | None = None,
     ) -> WalkingRobot:
         """Put the robot on the terrain, let it settle, and start its nodes on ``bus``.
 
@@ -107,14 +114,16 @@ class WalkingRobot:
         and mapping nodes too, with the ground under the standing robot as a prior and a
         first frame. The camera and the pose source publish through a faulty link when the
         settings ask for faults. With ``color`` the camera also renders colour images (for
-        a station).
+        a station). Each node's work is charged to it on ``meter`` (a new one when None).
         """
+        meter = meter if meter is not None else CpuMeter()
         camera_mount = None if settings.blind else settings.camera
         height = settings.command.body_height
         setup = BackendSetup(spec, height, terrain, camera_mount, dict(settings.backend_options))
         backend = BACKENDS.get(settings.backend).open(setup)
         backend.advance(settings.settle_seconds)
         planner = camera = mapping = guard = None
+        camera_node = "camera"
         link = FaultyLink(bus, settings.faults, settings.seed) if settings.faults.active else None
         if not settings.blind:
             planner = TerrainPlanner(spec, settings.planner)
@@ -124,24 +133,35 @@ class WalkingRobot:
             if body is None:
                 body = np.array([*terrain.start, float(terrain.height(*terrain.start)) + height])
             mapping = MappingNode(
-                bus, settings.map, settings.score, centre=(body[0], body[1]), reject_repeats=True
+                MeteredBus(bus, meter, "mapping"),
+                settings.map,
+                settings.score,
+                centre=(body[0], body[1]),
+                reject_repeats=True,
             )
             sensors: Bus = link if link is not None else bus
+            # The simulator's own sources are charged as the simulator's.
+            camera_node = ("sim_" if settings.camera_source == "sim" else "") + "camera"
+            pose_node = ("sim_" if settings.pose_source == "sim" else "") + "pose"
             camera = CAMERAS.get(settings.camera_source).open(
                 SourceSetup(
-                    sensors, backend, settings.camera, color, options=dict(settings.camera_options)
+                    MeteredBus(sensors, meter, camera_node),
+                    backend,
+                    settings.camera,
+                    color,
+                    options=dict(settings.camera_options),
                 )
             )
             POSES.get(settings.pose_source).open(
                 SourceSetup(
-                    sensors,
+                    MeteredBus(sensors, meter, pose_node),
                     backend,
                     settings.camera,
                     camera=camera,
                     options=dict(settings.pose_options),
                 )
             )
-            guard = PoseGuardNode(bus)
+            guard = PoseGuardNode(MeteredBus(bus, meter, "pose_guard"))
             if hasattr(backend, "attitude") and backend.attitude is None:
                 # A robot without an IMU of its own takes its attitude from its camera's
                 # IMU where the camera has one, else from its pose source.
@@ -152,7 +172,8 @@ class WalkingRobot:
             else:
                 ground = float(body[2]) - height
             bus.publish(GroundPrior.TOPIC, GroundPrior(0.0, body, ground, START_PRIOR_RADIUS))
-            camera.tick(0.0)
+            with meter.measure(camera_node):
+                camera.tick(0.0)
         controller = WalkController(
             spec,
             settings.gait,
@@ -164,9 +185,22 @@ class WalkingRobot:
         if log_ticks is not None:
             controller.touchdowns = deque(maxlen=log_ticks)
         graph = WalkingGraph.build(
-            bus, backend, controller, command_timeout=command_timeout, log_ticks=log_ticks
+            bus, backend, controller, command_timeout, log_ticks, meter=meter
         )
-        return cls(spec, settings, terrain, backend, bus, graph, camera, mapping, guard, link)
+        return cls(
+            spec,
+            settings,
+            terrain,
+            backend,
+            bus,
+            graph,
+            camera,
+            mapping,
+            guard,
+            link,
+            meter=meter,
+            camera_node=camera_node,
+        )
 
     def step(self, t: float, dt: float) -> None:
         """One control tick at ``t``, the physics over ``dt``, and the camera if due [s].
@@ -177,7 +211,8 @@ class WalkingRobot:
         controller's.
         """
         if t > self.simulated_until + 1e-9:
-            self.backend.advance(t - self.simulated_until)
+            with self.meter.measure("sim_physics"):
+                self.backend.advance(t - self.simulated_until)
         if self.link is not None:
             self.link.advance(t)
         t0, cpu0 = time.perf_counter(), time.thread_time()
@@ -186,7 +221,8 @@ class WalkingRobot:
         self.control_cpu_seconds = time.thread_time() - cpu0
         self.simulated_until = t + dt
         if self.camera is not None:
-            self.camera.tick(t + dt)
+            with self.meter.measure(self.camera_node):
+                self.camera.tick(t + dt)
 
     def close(self) -> None:
         """Release the renderer, and the backend's port or device (one that has them)."""
@@ -243,6 +279,7 @@ class WalkingRobot:
                 stride_m=controller.config.stride,
             ),
             robustness=self._robustness(log),
+            nodes=self.meter.report(gait.sim_seconds),
         )
         bus = getattr(self.backend, "bus_metrics", None)
         if callable(bus):

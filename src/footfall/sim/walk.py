@@ -55,8 +55,11 @@ def simulate_walk(
     robot = WalkingRobot.build(spec, settings, terrain, bus)
     if on_build is not None:
         on_build(robot)
+    meter = robot.meter
     navigator = (
-        NavigatorNode(bus, spec, config=settings.navigation, background=settings.realtime)
+        NavigatorNode(
+            bus, spec, config=settings.navigation, background=settings.realtime, meter=meter
+        )
         if settings.navigates
         else None
     )
@@ -83,7 +86,8 @@ def simulate_walk(
         if overruns is not None and overruns.skips(t):
             return False  # an earlier tick ran over this one's slot; the physics goes on
         t0 = time.perf_counter()
-        task.command(t)  # with a navigator: hands maps over, and replans when not background
+        with meter.measure("sim_task"):  # steering to the goal; the navigator's work is its own
+            task.command(t)  # with a navigator: hands maps over, and replans when not background
         command_seconds.append(time.perf_counter() - t0)
         robot.step(t, dt)
         if on_tick is not None:

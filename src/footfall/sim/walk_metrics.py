@@ -246,6 +246,9 @@ class WalkMetrics:
         navigated: Whether routes were planned (None: not said).
         bridge: The network bridge's traffic (``footfall robot``), else None.
         servo_bus: The servo bus's traffic (a Dynamixel bus), else None.
+        nodes: Per node: CPU seconds, share of one core per second walked, calls, median
+            and 95th percentile latency [ms] (the simulator's names start with ``sim``),
+            else None.
     """
 
     gait: GaitMetrics
@@ -260,6 +263,7 @@ class WalkMetrics:
     navigated: bool | None = None
     bridge: BridgeTraffic | None = None
     servo_bus: ServoBusMetrics | None = None
+    nodes: dict[str, dict[str, float]] | None = None
 
     @property
     def fell(self) -> bool:
@@ -289,6 +293,12 @@ class WalkMetrics:
             out.update(asdict(self.bridge))
         if self.servo_bus is not None:
             out["servo_bus"] = asdict(self.servo_bus)
+        if self.nodes is not None:
+            out["cpu_per_node"] = {name: n["cpu_s"] for name, n in self.nodes.items()}
+            own = sum(n["cpu_s"] for name, n in self.nodes.items() if not name.startswith("sim"))
+            seconds = self.gait.sim_seconds
+            out["cpu_own_share"] = own / seconds if seconds > 0 else 0.0
+            out["nodes"] = self.nodes
         return out
 
 
