@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import math
+import subprocess
+import sys
 from unittest.mock import ANY
 
 import pytest
@@ -308,3 +310,28 @@ def test_python_dash_m_footfall_is_the_command():
     assert footfall.WalkController.__module__ == "footfall.motion.walker"
     with pytest.raises(AttributeError, match="no attribute 'Nothing'"):
         footfall.Nothing  # noqa: B018
+
+
+def test_the_command_list_loads_no_command():
+    """`footfall --help` lists every command from the table alone: no command's module, the
+    simulator, numba or MuJoCo is imported for it (start-up stays a blink)."""
+    from footfall.cli.commands import COMMANDS
+
+    heavy = ("numba", "mujoco", "scipy", "footfall.sim", "zenoh")
+    script = (
+        "import sys\n"
+        "from footfall.cli import main\n"
+        "try:\n"
+        "    main(['--help'])\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        f"heavy = [m for m in {heavy!r} if m in sys.modules]\n"
+        "loaded = [m for m in sys.modules if m.startswith('footfall.cli.')]\n"
+        "loaded.remove('footfall.cli.commands')\n"
+        "print('HEAVY', heavy, 'LOADED', loaded)\n"
+    )
+    command = [sys.executable, "-c", script]
+    done = subprocess.run(command, capture_output=True, text=True, check=True)
+    assert "HEAVY [] LOADED []" in done.stdout, done.stdout
+    for name in COMMANDS:
+        assert name in done.stdout

@@ -1,60 +1,53 @@
 """The ``footfall`` command line.
 
 One module per subcommand, each parsing its options into a request, calling the library's
-``run_*`` function (:mod:`footfall.reports`) and printing the report.
+``run_*`` function (:mod:`footfall.reports`) and printing the report. A subcommand's module
+(and what it imports: the simulator, the SDKs) loads only when that command is run or its
+help asked for; ``footfall --help`` lists the commands from :mod:`footfall.cli.commands`.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import sys
 
-from rich.console import Console
-
-from footfall.cli import (
-    bench,
-    convert,
-    map,
-    obstacles,
-    plan,
-    replay,
-    robot,
-    servo_bus,
-    station,
-    walk,
-    walk_biped,
-)
+from footfall.cli.commands import COMMANDS
 from footfall.errors import FootfallError
 
-SUBCOMMANDS = (
-    walk,
-    map,
-    replay,
-    convert,
-    bench,
-    plan,
-    obstacles,
-    robot,
-    servo_bus,
-    station,
-    walk_biped,
-)
 
+def build_parser(command: str | None = None, brief: bool = False) -> argparse.ArgumentParser:
+    """The ``footfall`` argument parser.
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``footfall`` argument parser."""
+    Args:
+        command: Build only this subcommand's options (the others are listed by name and
+            help); None: every subcommand's.
+        brief: List every subcommand by name and help alone (``footfall --help``).
+    """
     parser = argparse.ArgumentParser(
         prog="footfall",
         description="Legged robots walking over uneven terrain, simulated and recorded.",
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for module in SUBCOMMANDS:
-        module.add_parser(subparsers)
+    for name, (module, help_text) in COMMANDS.items():
+        if brief or (command is not None and name != command):
+            subparsers.add_parser(name, help=help_text)
+        else:
+            importlib.import_module(module).add_parser(subparsers)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``footfall`` console script."""
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    command = next((a for a in argv if not a.startswith("-")), None)
+    if command in COMMANDS:
+        parser = build_parser(command)
+    else:  # no command, --help, or an unknown one: the list is all that is needed
+        parser = build_parser(brief=True)
+    args = parser.parse_args(argv)
+    from rich.console import Console
+
     console = Console()
     try:
         return args.handler(args, console)

@@ -9,6 +9,7 @@ from rich.console import Console
 from rich.table import Table
 
 from footfall.cli.bench_walks import add_walking_suites
+from footfall.cli.commands import summary
 from footfall.cli.common import count_progress, wrote
 
 
@@ -16,7 +17,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``bench`` and its suites."""
     p = subparsers.add_parser(
         "bench",
-        help="measure footfall's speed",
+        help=summary("bench"),
         description="Measure footfall's speed against baselines timed in the same run.",
     )
     kinds = p.add_subparsers(dest="suite", metavar="SUITE", required=True)

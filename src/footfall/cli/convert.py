@@ -7,6 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.common import add_depth_camera_options
 
 
@@ -14,7 +15,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``convert`` and its kinds."""
     p = subparsers.add_parser(
         "convert",
-        help="convert recorded data: Redwood to the TUM layout, TUM or Redwood to MCAP",
+        help=summary("convert"),
         description=(
             "Convert recorded data into the TUM RGB-D layout `footfall map --tum` reads, or "
             "into an MCAP file of ROS 2 messages that `footfall replay` reads."

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.common import (
     add_camera_pose_options,
     add_depth_camera_options,
@@ -25,7 +26,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
     p = subparsers.add_parser(
         "map",
-        help="build a height map and score map, in simulation or from a recorded sequence",
+        help=summary("map"),
         description=(
             "Walk the simulated hexapod across a terrain while its depth camera builds the "
             "rolling height map, or map a recorded TUM-layout sequence (--tum). Writes "

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.common import add_cloud_options, cloud_request, wrote
 
 
@@ -14,7 +15,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``obstacles``."""
     p = subparsers.add_parser(
         "obstacles",
-        help="detect obstacles in a point cloud",
+        help=summary("obstacles"),
         description=(
             "Detect obstacles in a point cloud (dissertation §6.3.1): pass-through filter, voxel "
             "grid, ground removal, Euclidean clustering, principal-axes boxes and circles "

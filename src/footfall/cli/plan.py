@@ -7,6 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.common import add_cloud_options, cloud_request, wrote
 
 
@@ -14,7 +15,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``plan``."""
     p = subparsers.add_parser(
         "plan",
-        help="plan a biped's path, footsteps and centre-of-mass pattern around obstacles",
+        help=summary("plan"),
         description=(
             "Plan the humanoid's walk (dissertation §6.3): a path around circular obstacles, "
             "footsteps along it and the Linear Inverted Pendulum pattern over them. Writes "

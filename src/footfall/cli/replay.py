@@ -7,6 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.common import add_camera_pose_options, format_value, print_table, wrote
 
 
@@ -16,7 +17,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
     p = subparsers.add_parser(
         "replay",
-        help="replay a recording (footfall MCAP, ROS 2 bag, ROS 1 bag) into a map",
+        help=summary("replay"),
         description=(
             "Play a recording's depth images and camera poses through the same mapping and "
             "scoring nodes as a live run: footfall's own MCAP recordings, ROS 2 bags (sqlite3 "

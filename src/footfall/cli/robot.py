@@ -8,6 +8,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.common import add_recording_options, key_values, wrote
 from footfall.errors import ConfigError
 
@@ -66,7 +67,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
     p = subparsers.add_parser(
         "robot",
-        help="run the hexapod as a robot on the network, driven by a base station",
+        help=summary("robot"),
         description=(
             "Run the hexapod's nodes (camera, pose, mapping, movement, servo) on a robot "
             "backend (the MuJoCo robot by default), paced to the wall clock, and bridge them "

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.robot import add_network_options, network_config
 
 SENSOR_ENDPOINT = "tcp/127.0.0.1:7448"
@@ -19,8 +20,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
     p = subparsers.add_parser(
         "servo-bus",
-        help="serve the simulated robot's servos on a pseudo-terminal and its camera on the "
-        "network, for a dry run of footfall robot --hardware",
+        help=summary("servo-bus"),
         description=(
             "Emulated Dynamixel servos turning the MuJoCo robot's joints answer on a "
             "pseudo-terminal that --link names, at the wall clock's pace; the robot's depth "

@@ -6,6 +6,7 @@ import argparse
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.robot import add_network_options, network_config
 
 
@@ -15,7 +16,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
     p = subparsers.add_parser(
         "station",
-        help="the base station: a browser page to watch and drive the robot",
+        help=summary("station"),
         description=(
             "Connect to the robot's zenoh network and serve a page (viser) with its depth "
             "image, height and score maps, pose, gait status, log and link state, and the "

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.common import (
     add_recording_options,
     format_value,
@@ -49,7 +50,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
     p = subparsers.add_parser(
         "walk",
-        help="simulate the hexapod walking across a terrain and measure it",
+        help=summary("walk"),
         description=(
             "Simulate the hexapod in MuJoCo walking to the far end of a terrain with the full "
             "loop: depth camera -> height map -> walkability scores -> footholds -> gait -> "

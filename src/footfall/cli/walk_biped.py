@@ -7,6 +7,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from footfall.cli.commands import summary
 from footfall.cli.common import format_value, print_table, wrote
 
 SUMMARY = (
@@ -27,7 +28,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``walk-biped``."""
     p = subparsers.add_parser(
         "walk-biped",
-        help="simulate the biped Archie walking its plan around obstacles",
+        help=summary("walk-biped"),
         description=(
             "Simulate Archie in MuJoCo: a path around the obstacles, footsteps, a centre-of-mass "
             "pattern, joint angles from the legs' kinematics, a ZMP and attitude stabiliser. "
