@@ -16,7 +16,7 @@ from footfall.cli.common import (
     wrote,
 )
 from footfall.errors import ConfigError
-from footfall.motion.gait import GAITS
+from footfall.motion.gait import DEFAULT_SPEED_MPS, GAITS
 from footfall.motion.swing import SWINGS
 from footfall.robot.spec import BUILTIN_ROBOTS
 
@@ -46,7 +46,6 @@ SUMMARY = (
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``walk``."""
     from footfall.sim.terrains import TERRAINS, difficulty_parameters
-    from footfall.sim.walk_request import DEFAULT_SPEED_MPS
 
     p = subparsers.add_parser(
         "walk",

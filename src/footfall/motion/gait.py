@@ -26,6 +26,9 @@ from footfall.motion.flow_swing import FlowConfig
 from footfall.motion.swing import SWINGS
 from footfall.registry import Registry
 
+# A walk's default body speed [m/s], lowered to 3/4 of the gait's top speed where that is less.
+DEFAULT_SPEED_MPS = 0.10
+
 
 @dataclass(frozen=True)
 class Gait:

@@ -21,7 +21,6 @@ from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
-from scipy import ndimage
 
 from footfall.errors import ConfigError
 from footfall.sim.terrain import Terrain, TerrainXml, box_xml
@@ -65,6 +64,8 @@ def route_exists(
     The free space is the grid over ``bounds`` ``(x0, x1, y0, y1)`` minus every box grown by
     the clearance; the start and goal must lie in one connected piece of it.
     """
+    from scipy import ndimage  # with the first layout, not with the list of terrains
+
     x0, x1, y0, y1 = bounds
     xs = x0 + (np.arange(round((x1 - x0) / cell)) + 0.5) * cell
     ys = y0 + (np.arange(round((y1 - y0) / cell)) + 0.5) * cell

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from footfall.errors import ConfigError, UnreachableTargetError
 from footfall.messages import WalkCommand
-from footfall.motion.gait import GaitConfig
+from footfall.motion.gait import DEFAULT_SPEED_MPS, GaitConfig
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.spec import HexapodSpec, load_spec
 from footfall.runtime.fault_spec import FaultSpec
@@ -21,8 +21,6 @@ from footfall.sim.terrain import Terrain
 from footfall.sim.terrains import TERRAINS, difficulty_parameters, make_terrain
 from footfall.sim.walk_settings import WalkSettings
 
-# The walk's default speed [m/s], lowered to 3/4 of the gait's top speed where that is less.
-DEFAULT_SPEED_MPS = 0.10
 # A walk with no --seconds gets this many times the straight line's time, and at least
 # MIN_DEFAULT_SECONDS [s].
 DEFAULT_TIME_MARGIN = 2.0
