@@ -427,3 +427,34 @@ def test_a_segment_visits_every_cell_it_crosses(coords):
     in_cells = (dense - np.asarray(grid.origin)) / grid.resolution
     off_lines = np.all(np.abs(in_cells - np.round(in_cells)) > 1e-6, axis=1)
     assert {grid.cell_of(p) for p in dense[off_lines]} <= visited
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    tops=st.dictionaries(
+        st.tuples(st.integers(-40, 40), st.integers(-40, 40)), st.floats(0.0, 1.0), max_size=60
+    ),
+    flat=st.integers(0, 2**32 - 1),
+    origin=st.tuples(st.integers(-30, 30), st.integers(-30, 30)),
+)
+def test_forgetting_flat_cells_is_the_cell_by_cell_rule(tops, flat, origin):
+    """Remembered walls go exactly where the grid shows flat cells, wherever its window
+    lies: the same as visiting every flat cell of the grid."""
+    from types import SimpleNamespace
+
+    from footfall.nodes.navigation import WallMemory
+
+    resolution = 0.02
+    flat_cells = np.random.default_rng(flat).random((32, 24)) < 0.5
+    grid = SimpleNamespace(
+        origin=(origin[0] * resolution, origin[1] * resolution),
+        resolution=resolution,
+        flat=flat_cells,
+    )
+    memory = WallMemory()
+    memory._tops = dict(tops)
+    memory.forget_flat(grid)
+    expected = dict(tops)
+    for i, j in zip(*np.nonzero(flat_cells), strict=True):
+        expected.pop((int(i) + origin[0], int(j) + origin[1]), None)
+    assert memory._tops == expected

@@ -115,11 +115,23 @@ class WallMemory:
                     self._tops[key] = top
 
     def forget_flat(self, grid: CostGrid) -> None:
-        """Forget the walls on cells the grid shows flat."""
+        """Forget the walls on cells the grid shows flat.
+
+        Looks up the remembered cells in the grid (a few hundred at most), not the grid's
+        flat cells in the memory (most of a 256 x 256 window).
+        """
         i0, j0 = self._offset(grid.origin, grid.resolution)
+        n, m = grid.flat.shape
         with self._lock:
-            for i, j in zip(*np.nonzero(grid.flat), strict=True):
-                self._tops.pop((int(i) + i0, int(j) + j0), None)
+            if not self._tops:
+                return
+            keys = np.array(list(self._tops), dtype=np.int64)
+            i, j = keys[:, 0] - i0, keys[:, 1] - j0
+            inside = (i >= 0) & (i < n) & (j >= 0) & (j < m)
+            flat = np.zeros(len(keys), dtype=bool)
+            flat[inside] = grid.flat[i[inside], j[inside]]
+            for gi, gj in keys[flat]:
+                del self._tops[(int(gi), int(gj))]
 
 
 class NavigatorNode:
