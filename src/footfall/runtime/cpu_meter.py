@@ -15,8 +15,7 @@ from __future__ import annotations
 import threading
 import time
 from collections import defaultdict
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -33,28 +32,21 @@ class CpuMeter:
         self._lock = threading.Lock()
         self._local = threading.local()
 
-    @contextmanager
-    def measure(self, node: str) -> Iterator[None]:
-        """Charge what runs inside to ``node`` (less what nested nodes take)."""
+    def measure(self, node: str) -> _Span:
+        """Charge what runs inside (``with``) to ``node``, less what nested nodes take."""
+        return _Span(self, node)
+
+    def _stack(self) -> list[list]:
         stack = getattr(self._local, "stack", None)
         if stack is None:
             stack = self._local.stack = []
-        outermost = not any(frame[0] == node for frame in stack)
-        frame = [node, time.thread_time(), 0.0, time.perf_counter(), 0.0]
-        stack.append(frame)
-        try:
-            yield
-        finally:
-            stack.pop()
-            spent = time.thread_time() - frame[1]
-            took = time.perf_counter() - frame[3]
-            with self._lock:
-                self.cpu_s[node] += spent - frame[2]
-                if outermost:
-                    self.latency_s[node].append(took - frame[4])
-            if stack:
-                stack[-1][2] += spent
-                stack[-1][4] += took
+        return stack
+
+    def _charge(self, node: str, cpu_s: float, latency_s: float | None) -> None:
+        with self._lock:
+            self.cpu_s[node] += cpu_s
+            if latency_s is not None:
+                self.latency_s[node].append(latency_s)
 
     def wrap(self, node: str, function: Callable[..., Any]) -> Callable[..., Any]:
         """``function``, charged to ``node`` on every call."""
@@ -85,6 +77,33 @@ class CpuMeter:
                     "latency_p95_ms": float(p95),
                 }
         return out
+
+
+class _Span:
+    """One timed call of a node (a context manager; plain slots, as it runs every tick)."""
+
+    __slots__ = ("_frame", "_meter", "_node", "_outermost", "_stack")
+
+    def __init__(self, meter: CpuMeter, node: str) -> None:
+        self._meter, self._node = meter, node
+
+    def __enter__(self) -> None:
+        stack = self._stack = self._meter._stack()
+        self._outermost = not any(frame[0] == self._node for frame in stack)
+        # node, CPU at the start, nested nodes' CPU, wall at the start, nested nodes' wall
+        self._frame = [self._node, time.thread_time(), 0.0, time.perf_counter(), 0.0]
+        stack.append(self._frame)
+
+    def __exit__(self, *exc: object) -> None:
+        frame, stack = self._frame, self._stack
+        stack.pop()
+        spent = time.thread_time() - frame[1]
+        took = time.perf_counter() - frame[3]
+        latency = took - frame[4] if self._outermost else None
+        self._meter._charge(self._node, spent - frame[2], latency)
+        if stack:
+            stack[-1][2] += spent
+            stack[-1][4] += took
 
 
 class MeteredBus:
