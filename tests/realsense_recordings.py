@@ -90,24 +90,22 @@ def write_recording(
     device.register_info(rs.camera_info.name, "Intel RealSense D435I (software)")
     device.register_info(rs.camera_info.serial_number, "000000000042")
     streams = []
-    if depth:
-        depth_sensor = device.add_sensor("Stereo Module")
+
+    def video(name: str, kind, uid: int, bpp: int, fmt):
+        sensor = device.add_sensor(name)
         stream = rs.video_stream()
-        stream.type, stream.index, stream.uid = rs.stream.depth, 0, 0
+        stream.type, stream.index, stream.uid = kind, 0, uid
         stream.width, stream.height, stream.fps = camera.width, camera.height, fps
-        stream.bpp, stream.fmt, stream.intrinsics = 2, rs.format.z16, _intrinsics(camera)
-        depth_profile = depth_sensor.add_video_stream(stream, True)
+        stream.bpp, stream.fmt, stream.intrinsics = bpp, fmt, _intrinsics(camera)
+        streams.append((sensor, [sensor.add_video_stream(stream, True)]))
+        return sensor
+
+    if depth:
+        depth_sensor = video("Stereo Module", rs.stream.depth, 0, 2, rs.format.z16)
         depth_sensor.add_read_only_option(rs.option.depth_units, depth_units)
-        streams.append((depth_sensor, [depth_profile]))
     has_color = any(f.color is not None for f in frames)
     if has_color:
-        color_sensor = device.add_sensor("RGB Camera")
-        stream = rs.video_stream()
-        stream.type, stream.index, stream.uid = rs.stream.color, 0, 1
-        stream.width, stream.height, stream.fps = camera.width, camera.height, fps
-        stream.bpp, stream.fmt, stream.intrinsics = 3, rs.format.rgb8, _intrinsics(camera)
-        color_profile = color_sensor.add_video_stream(stream, True)
-        streams.append((color_sensor, [color_profile]))
+        video("RGB Camera", rs.stream.color, 1, 3, rs.format.rgb8)
     if motion:
         motion_sensor = device.add_sensor("Motion Module")
         profiles = []

@@ -26,10 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from footfall.biped.body import SIDES, load_biped_spec
-from footfall.biped.footsteps import Footsteps, plan_footsteps
+from footfall.biped.footsteps import Footsteps, StepLimits, plan_footsteps
 from footfall.biped.gait import gait_pattern, stop_after_step
 from footfall.biped.lipm import LipmConfig
-from footfall.biped.maps import PlanMap
 from footfall.biped.planner import WalkPlan, plan_walk
 from footfall.errors import FootfallError
 from footfall.messages import BipedStatus, Mode, ModeCommand
@@ -65,6 +64,7 @@ class BipedWalkerNode:
         plan: Plans from where the feet stand to a goal (the planning node's ``plan_to``).
         z_c: Height of the COM, ``z_c`` of the cart-table model [m].
         lipm: The pendulum's settings (the step time).
+        limits: Step limits of the footsteps.
         look_ahead_m: How far to walk along a plan before looking and planning again [m].
         stabiliser: Gains of the stabiliser.
         command_timeout: The watchdog's limit [s].
@@ -79,6 +79,7 @@ class BipedWalkerNode:
         plan: Callable[[tuple[float, float]], WalkPlan],
         z_c: float,
         lipm: LipmConfig,
+        limits: StepLimits,
         look_ahead_m: float = 1.0,
         stabiliser: StabiliserConfig | None = None,
         command_timeout: float = COMMAND_TIMEOUT,
@@ -105,7 +106,7 @@ class BipedWalkerNode:
         self._sim_t = 0.0  # simulated time since standing began [s]
         self._next_status = 0.0
         self._why: str | None = None  # why the walk ends with the step under way
-        self._limits = PlanMap("limits", (0.0, 0.0), (1.0, 0.0), ()).limits
+        self._limits = limits
         bus.subscribe(ModeCommand.TOPIC, self._on_mode)
 
     def _on_mode(self, message: ModeCommand) -> None:
@@ -270,7 +271,7 @@ class WalkingBiped:
         from footfall.sim.camera import SimDepthCamera
 
         spec = load_biped_spec(spec_name)
-        model, sim, mount, _, z_c, lipm = stand_in_room(room, spec)
+        model, sim, mount, limits, z_c, lipm = stand_in_room(room, spec)
         camera = SimDepthCamera(model, mount)
 
         def where() -> tuple[float, float]:
@@ -284,7 +285,7 @@ class WalkingBiped:
             planner=lambda plan_map: plan_walk(body_plan_map(plan_map, spec), lipm),
             look_period_s=LOOK_PERIOD,
         )
-        walker = BipedWalkerNode(bus, sim, planning.plan_to, z_c, lipm, look_ahead_m)
+        walker = BipedWalkerNode(bus, sim, planning.plan_to, z_c, lipm, limits, look_ahead_m)
         planning.on_goal = walker.set_goal
         planning.capturing = True  # a robot with a camera looks from the start
         return cls(room, sim, planning, walker, camera.close)
