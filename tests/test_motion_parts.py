@@ -151,6 +151,28 @@ def test_a_swinging_foot_beyond_the_stretched_leg_is_drawn_in(default_spec):
         )
 
 
+def test_a_swinging_foot_lifted_high_beside_the_hip_is_lowered_into_reach(default_spec):
+    """A swing lifted over an obstacle while its foot passes beside the hip can put the
+    foot above what the folded leg reaches, further above it than a step height: the
+    solver lowers it straight down, as little as the leg needs, instead of freezing."""
+    kin = LegKinematics(default_spec)
+    solver = LegSolver(kin, default_spec.foot_radius)
+    feet = _standing(default_spec)
+    back = 2
+    high = feet.copy()
+    high[back] = kin.mounts_in_body[back] + [-0.04, 0.04, 0.07]  # above and beside the hip
+    assert not kin.reachable(back, high[back] - [0.0, 0.0, 0.1])
+    swing = np.zeros(6, dtype=bool)
+    swing[back] = True
+    out = solver.solve(high, swing, PlanarPose(), NO_FEEDBACK, ((0.0, 0.0), 0.0), np.zeros((6, 3)))
+    lowered = out.feet_in_body[back]
+    assert kin.reachable(back, lowered)
+    np.testing.assert_allclose(lowered[:2], high[back, :2])
+    assert lowered[2] < high[back, 2] - 0.1
+    assert not kin.reachable(back, lowered + [0.0, 0.0, 0.006])  # no lower than needed
+    np.testing.assert_allclose(out.feet_in_body[~swing], feet[~swing], atol=1e-12)
+
+
 # Gait scheduler -------------------------------------------------------------------------
 def test_scheduler_alternates_tripods_and_times_steps(default_spec):
     """After the first tripod (from the walk direction), the tripods alternate; each leg's
@@ -176,6 +198,28 @@ def test_scheduler_alternates_tripods_and_times_steps(default_spec):
     np.testing.assert_allclose(horizons[swinging], 2 * s.step_duration)
     np.testing.assert_array_equal(s.support_after(swinging), swinging)
     assert s.step_over(2.0 + s.step_duration) and not s.step_over(2.0 + 0.5 * s.step_duration)
+
+
+def test_a_step_started_while_the_body_accelerates_is_timed_for_the_command(any_spec):
+    """A walk starting from rest: the twist is still small when the first step starts, but
+    the body will reach the commanded speed before the step ends. The step is timed for
+    the command, so the supporting feet travel no more than a stride; timed for the twist
+    at its start it would last the longest step and they would trail twice as far."""
+    gait = GaitConfig(kind="tripod").for_robot(any_spec.stride_length, any_spec.max_step_height)
+    rest = any_spec.rest_feet_in_body()
+    s = GaitScheduler(gait, rest, any_spec.mount_positions_in_body)
+    shaper = CommandShaper(gait, any_spec.body_height)
+    command = WalkCommand(speed=0.1, yaw_rate=0.3)
+    shaper.shape(command, 0.01)  # one tick into the walk
+    s.begin_step(0.0, shaper)
+    held = CommandShaper(gait, any_spec.body_height)
+    held.velocity, held.yaw_rate = (0.1, 0.0), 0.3
+    assert s.step_duration == pytest.approx(gait.step_duration(held.foot_speed(rest)))
+    assert held.foot_speed(rest) * s.step_duration <= gait.stride / (len(gait.groups) - 1)
+    slowing = CommandShaper(gait, any_spec.body_height)
+    slowing.velocity = (0.1, 0.0)
+    slowing.shape(WalkCommand(speed=0.0), 0.01)  # asked to stop: timed for the speed it has
+    assert slowing.foot_speed(rest) == pytest.approx(0.1, abs=0.006)
 
 
 def test_scheduler_steps_back_to_rest_only_for_feet_out_of_place(default_spec):

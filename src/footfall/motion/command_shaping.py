@@ -26,6 +26,9 @@ class CommandShaper:
     Attributes:
         velocity: Body velocity in the body frame after the rate limits [m/s].
         yaw_rate: Yaw rate after its rate limit [rad/s].
+        target_velocity: The velocity the rate limits are moving towards: the last
+            command's, capped at the gait's top speed [m/s].
+        target_yaw_rate: The yaw rate they are moving towards [rad/s].
         last_walk_direction: Unit direction of the last command that asked for motion.
         body_height: The last commanded body height [m].
         last_command: The last command, or None before the first.
@@ -35,6 +38,8 @@ class CommandShaper:
         self.config = config
         self.velocity = (0.0, 0.0)
         self.yaw_rate = 0.0
+        self.target_velocity = (0.0, 0.0)
+        self.target_yaw_rate = 0.0
         self.last_walk_direction = np.array([1.0, 0.0])
         self.body_height = body_height
         self.last_command: WalkCommand | None = None
@@ -47,6 +52,7 @@ class CommandShaper:
         speed = math.hypot(vx, vy)
         if speed > self.config.max_speed:
             vx, vy = vx * self.config.max_speed / speed, vy * self.config.max_speed / speed
+        self.target_velocity, self.target_yaw_rate = (vx, vy), command.yaw_rate
         if speed > 0:
             self.last_walk_direction = np.array([vx, vy]) / math.hypot(vx, vy)
         dv = np.array([vx - self.velocity[0], vy - self.velocity[1]])
@@ -73,8 +79,18 @@ class CommandShaper:
         return self.walking or abs(self.yaw_rate) > 1e-6
 
     def foot_speed(self, rest_in_body: npt.NDArray[np.float64]) -> float:
-        """Fastest ground speed of a rest foot under the twist [m/s]."""
-        vx, vy = self.velocity
+        """Fastest ground speed of a rest foot under the twist or the one it heads to [m/s].
+
+        A step is timed for it: a step started while the body accelerates (from rest, or
+        out of a turn) would otherwise last as long as a slow step while the body travels
+        as far as a fast one, and the supporting feet would trail beyond their stroke.
+        """
         rest = rest_in_body[:, :2]
-        speeds = np.hypot(vx - self.yaw_rate * rest[:, 1], vy + self.yaw_rate * rest[:, 0])
-        return float(speeds.max())
+        top = 0.0
+        for (vx, vy), yaw_rate in (
+            (self.velocity, self.yaw_rate),
+            (self.target_velocity, self.target_yaw_rate),
+        ):
+            speeds = np.hypot(vx - yaw_rate * rest[:, 1], vy + yaw_rate * rest[:, 0])
+            top = max(top, float(speeds.max()))
+        return top

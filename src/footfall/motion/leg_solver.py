@@ -27,6 +27,8 @@ from footfall.robot.planar import PlanarPose
 
 # A foot drawn in stops this far inside the stretched leg [m].
 _DRAWN_IN_SLACK = 1e-4
+# A swinging foot out of reach is lowered in steps of this until the leg reaches it [m].
+_LOWERING_STEP = 0.005
 
 
 @dataclass(frozen=True)
@@ -84,11 +86,15 @@ class LegSolver:
         reaches it. Supporting feet are never moved.
         """
         out = feet_in_body.copy()
-        for leg in np.flatnonzero(swinging & ~self.kinematics.reachable_all(out)):
+        k = self.kinematics
+        # Lowered by up to the leg's length: a foot lifted over an obstacle while it
+        # passes close to the body may be above what the leg reaches however short its
+        # step height.
+        drops = np.arange(0.0, k.L2 + k.L3, _LOWERING_STEP)
+        for leg in np.flatnonzero(swinging & ~k.reachable_all(out)):
             for candidate in (out[leg], self.within_coxa_range(int(leg), out[leg])):
-                drops = np.arange(0.0, 0.1001, 0.005)
                 lowered = candidate - np.outer(drops, [0.0, 0.0, 1.0])
-                ok = self.kinematics.reachable(int(leg), lowered)
+                ok = k.reachable(int(leg), lowered)
                 if ok.any():
                     out[leg] = lowered[int(np.argmax(ok))]
                     break
