@@ -169,6 +169,12 @@ def test_bench_terrain_compares_every_combination(tmp_path, monkeypatch, capsys)
         assert v["runs"] == 2 and {"successes", "falls", "invalid_footholds"} <= v.keys()
         assert v["median_speed_mps"] >= 0.0 and math.isfinite(v["median_tilt_max_deg"])
     assert (out / "bench.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # Each walk walks with its combination's settings, not only the rows that name them.
+    from footfall.reliability.variants import Variant, walk_variant
+
+    lower = Variant("default", "tripod", (("robot.body_height", 0.08),))
+    walked = walk_variant(lower, "flat", seed=0, seconds=0.5).metrics
+    assert walked.setup.commanded_body_height_m == 0.08
     capsys.readouterr()
     for bad, named in (("scoring.thresold=0.3", "thresold"), ("scoring.threshold=0.3,-1", "-1")):
         failed = tmp_path / "failed"

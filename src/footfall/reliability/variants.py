@@ -116,6 +116,7 @@ def walk_variant(
             seed=seed,
             difficulty=difficulty,
             faults=faults,
+            overrides=variant.overrides,
         )
     )
     return simulate_walk(job.spec, job.settings, terrain=job.terrain)
