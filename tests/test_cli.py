@@ -335,3 +335,26 @@ def test_the_command_list_loads_no_command():
     assert "HEAVY [] LOADED []" in done.stdout, done.stdout
     for name in COMMANDS:
         assert name in done.stdout
+
+
+def test_every_commands_help_loads_no_heavy_library():
+    """`footfall COMMAND --help` builds only that command's options: neither scipy, numba,
+    MuJoCo, zenoh nor the message codec is imported for it (the robot's and the station's
+    options list the backends and sources by name, and the endpoint from a plain constant)."""
+    from footfall.cli.commands import COMMANDS
+
+    heavy = ("numba", "mujoco", "scipy", "zenoh", "footfall.messages")
+    script = (
+        "import sys\n"
+        "from footfall.cli import main\n"
+        "try:\n"
+        "    main([sys.argv[1], '--help'])\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        f"print('HEAVY', [m for m in {heavy!r} if m in sys.modules])\n"
+    )
+    for name in COMMANDS:
+        done = subprocess.run(
+            [sys.executable, "-c", script, name], capture_output=True, text=True, check=True
+        )
+        assert "HEAVY []" in done.stdout, (name, done.stdout)

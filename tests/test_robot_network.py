@@ -184,7 +184,8 @@ def test_by_default_the_robot_listens_on_loopback_only():
     scouting, and so does the session it opens."""
     from footfall.cli import build_parser
     from footfall.cli.robot import network_config
-    from footfall.runtime.zenoh_bus import DEFAULT_ENDPOINT, is_loopback
+    from footfall.runtime import DEFAULT_ENDPOINT
+    from footfall.runtime.zenoh_bus import is_loopback
 
     config = network_config(build_parser().parse_args(["robot"]))
     assert config.listen == (DEFAULT_ENDPOINT,) and not config.scouting

@@ -37,10 +37,11 @@ The contract every backend keeps:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
-from footfall.messages import JointTargets, RobotState
-from footfall.robot.spec import HexapodSpec
+if TYPE_CHECKING:  # the robot's parser lists the backends without loading the messages
+    from footfall.messages import JointTargets, RobotState
+    from footfall.robot.spec import HexapodSpec
 
 
 @dataclass(frozen=True)

@@ -62,7 +62,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``robot``."""
     from footfall.backends.registry import BACKENDS
     from footfall.nodes.sources import CAMERAS, POSES
-    from footfall.runtime.zenoh_bus import DEFAULT_ENDPOINT
+    from footfall.runtime import DEFAULT_ENDPOINT
     from footfall.sim.terrains import TERRAINS
 
     p = subparsers.add_parser(

@@ -12,7 +12,7 @@ from footfall.cli.robot import add_network_options, network_config
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``station``."""
-    from footfall.runtime.zenoh_bus import DEFAULT_ENDPOINT
+    from footfall.runtime import DEFAULT_ENDPOINT
 
     p = subparsers.add_parser(
         "station",

@@ -21,11 +21,13 @@ and :class:`~footfall.sim.walk.WalkSettings` choose by name.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
-from footfall.backends import HexapodBackend
 from footfall.registry import Registry
-from footfall.runtime.bus import Bus
+
+if TYPE_CHECKING:  # the robot's parser lists the sources without loading the bus
+    from footfall.backends import HexapodBackend
+    from footfall.runtime.bus import Bus
 
 
 @dataclass(frozen=True)

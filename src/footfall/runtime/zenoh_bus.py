@@ -32,7 +32,6 @@ from footfall.messages import LogLine
 from footfall.messages.codec import Message, decode
 from footfall.runtime.bus import Callback, Handler, ServiceError, TopicStats
 
-DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 KEY_PREFIX = "footfall"
 
 
