@@ -58,6 +58,10 @@ class LegSolver:
     def __init__(self, kinematics: LegKinematics, foot_radius: float) -> None:
         self.kinematics = kinematics
         self.foot_radius = foot_radius
+        # How far a swinging foot out of reach may be lowered: up to the leg's length, for
+        # a foot lifted over an obstacle as it passes close to the body may be above what
+        # the leg reaches however short its step height.
+        self._drops = np.arange(0.0, kinematics.L2 + kinematics.L3, _LOWERING_STEP)
         self.rolling_in_world = np.zeros((6, 3))
         self._tibia_pitch_at_touchdown = np.full(6, np.nan)  # psi when the foot came down
 
@@ -87,13 +91,9 @@ class LegSolver:
         """
         out = feet_in_body.copy()
         k = self.kinematics
-        # Lowered by up to the leg's length: a foot lifted over an obstacle while it
-        # passes close to the body may be above what the leg reaches however short its
-        # step height.
-        drops = np.arange(0.0, k.L2 + k.L3, _LOWERING_STEP)
         for leg in np.flatnonzero(swinging & ~k.reachable_all(out)):
             for candidate in (out[leg], self.within_coxa_range(int(leg), out[leg])):
-                lowered = candidate - np.outer(drops, [0.0, 0.0, 1.0])
+                lowered = candidate - np.outer(self._drops, [0.0, 0.0, 1.0])
                 ok = k.reachable(int(leg), lowered)
                 if ok.any():
                     out[leg] = lowered[int(np.argmax(ok))]
