@@ -73,6 +73,28 @@ def test_body_frame_round_trip(case):
     )
 
 
+@given(robot_and_angles())
+@settings(max_examples=200, deadline=None)
+def test_knee_lies_a_femur_from_the_femur_joint_and_a_tibia_from_the_foot(case):
+    """The knee found from a foot target is where forward kinematics of its angles puts it."""
+    kin, angles = case
+    feet_in_body = kin.forward_in_body(angles)
+    knees_in_leg = kin.forward(np.column_stack([angles[:, 0], angles[:, 1], np.zeros(6)]))
+    # The femur alone (tibia straight) ends L3 beyond the knee along the femur.
+    femur_dir = np.column_stack(
+        [
+            np.cos(angles[:, 1]) * np.cos(angles[:, 0]),
+            np.cos(angles[:, 1]) * np.sin(angles[:, 0]),
+            np.sin(angles[:, 1]),
+        ]
+    )
+    expected = kin.leg_to_body(knees_in_leg - kin.L3 * femur_dir)
+    for leg in range(6):
+        knee = kin.knees_in_body(leg, feet_in_body[leg])
+        np.testing.assert_allclose(knee, expected[leg], atol=1e-7)
+        assert np.linalg.norm(feet_in_body[leg] - knee) == pytest.approx(kin.L3, abs=1e-7)
+
+
 @given(robot_and_angles(), st.lists(st.floats(-1.0, 1.0), min_size=18, max_size=18))
 @settings(max_examples=200, deadline=None)
 def test_jacobian_matches_finite_differences(case, direction):

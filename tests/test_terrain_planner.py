@@ -165,3 +165,46 @@ def test_vectorised_reach_agrees_with_one_at_a_time(default_spec, leg):
     many = kin.reachable(leg, targets, 0.01)
     assert many.shape == (200,) and many.any() and not many.all()
     assert [kin.reachable(leg, t, 0.01) for t in targets] == list(many)
+
+
+def test_a_foothold_whose_knee_would_stand_in_a_block_is_moved(default_spec):
+    """A front foot pulled in towards its hip has its knee 9 cm out beyond the foot. With a
+    block under that knee too high for it (10.5 cm), the foothold moves to where the knee and
+    tibia clear the terrain at every body height the plan allows; with a block the knee
+    clears (3 cm), the same nominal foothold is kept; the foot's own cell is valid in both."""
+    spec = default_spec
+    kin = LegKinematics(spec)
+    lf = spec.leg_names.index("LF")
+    feet = _standing_feet(spec)
+    out = feet[lf, :2] - spec.mount_positions_in_body[lf, :2]
+    out /= np.linalg.norm(out)
+    nominal = feet.copy()
+    nominal[lf, :2] -= 0.09 * out
+    swing = np.zeros(6, dtype=bool)
+    swing[lf] = True
+    z = spec.body_height
+    knee = kin.knees_in_body(lf, nominal[lf] - [0.0, 0.0, z])
+    assert 0.08 < (knee[:2] - nominal[lf, :2]) @ out and knee[2] + z < 0.13
+    cells = -1.0 + (np.arange(100) + 0.5) * RES
+    gx, gy = np.meshgrid(cells, cells, indexing="ij")
+    beyond = (np.stack([gx, gy], axis=-1) - nominal[lf, :2]) @ out
+    under_knee = (beyond > 0.06) & (np.hypot(gx - knee[0], gy - knee[1]) < 0.08)
+    plans = {}
+    for height in (0.03, 0.105):
+        planner = _planner(spec, np.where(under_knee, height, 0.0))
+        plan = planner.plan(nominal, swing, ~swing | swing, feet, _poses(), [z])
+        assert not isinstance(plan, NoFoothold), plan
+        plans[height] = plan
+    assert not plans[0.03].adjusted[lf]
+    moved = plans[0.105]
+    assert moved.adjusted[lf]
+    for body_z in moved.body_z:
+        foot = moved.targets[lf] - [0.0, 0.0, body_z]
+        knee = kin.knees_in_body(lf, foot) + [0.0, 0.0, body_z]
+        for point in (knee, 0.5 * (knee + moved.targets[lf])):
+            # The terrain within a link's radius (a foot's) of the point.
+            rings = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]])
+            ring = point[:2] + spec.foot_radius * rings
+            i, j = ((ring + 1.0) // RES).astype(int).T
+            ground = 0.105 if under_knee[i, j].any() else 0.0
+            assert point[2] >= ground + spec.foot_radius, (point, ground)

@@ -24,6 +24,7 @@ from footfall.planning.footholds import (
     point_in_polygon_margin,
     registration_margin_cells,
 )
+from footfall.planning.leg_clearance import legs_clear_heights, midway
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
@@ -235,12 +236,25 @@ class TerrainPlanner:
             math.hypot(p.x - poses.now.x, p.y - poses.now.y) < IN_PLACE_TRAVEL_M
             for p in (poses.touchdown, poses.liftoff)
         )
+        # Its leg clears the terrain while the foot stands, from touchdown to lift-off.
+        stance_poses = (poses.touchdown, midway(poses.touchdown, poses.liftoff), poses.liftoff)
+        link_clearance = self.spec.foot_radius + c.min_body_clearance
         for leg in (int(k) for k in np.flatnonzero(swinging)):
 
             def reached_at(
-                centre: npt.NDArray[np.float64], leg: int = leg
+                centres: npt.NDArray[np.float64], leg: int = leg
             ) -> npt.NDArray[np.bool_]:
-                return self._reach_heights(leg, centre, reach_poses, heights, c.reach_margin)
+                """Heights at which the leg reaches each foot centre and clears the terrain."""
+                reach = self._reach_heights(leg, centres, reach_poses, heights, c.reach_margin)
+                return reach & legs_clear_heights(
+                    self.kinematics,
+                    self.terrain_under,
+                    leg,
+                    centres,
+                    stance_poses,
+                    heights,
+                    link_clearance,
+                )
 
             def first_accepted(
                 points: npt.NDArray[np.float64],
@@ -250,7 +264,7 @@ class TerrainPlanner:
                 """The first candidate reached at an allowed height and stable, or -1."""
                 centres = points.copy()
                 centres[:, 2] += r
-                reach = self._reach_heights(leg, centres, reach_poses, heights, c.reach_margin)
+                reach = reached_at(centres)
                 for m in np.flatnonzero((allowed & reach).any(axis=1)):
                     support = targets[support_after].copy()
                     support[np.flatnonzero(support_after) == leg] = centres[m]
@@ -290,7 +304,7 @@ class TerrainPlanner:
                     self.spec.leg_names[leg],
                 )
             targets[leg] = foothold.position + [0.0, 0.0, r]
-            feasible = feasible & reached_at(targets[leg])
+            feasible = feasible & reached_at(targets[leg][None])[0]
             adjusted[leg] = foothold.moved > 1e-9
         return FootholdPlan(targets, nominal.copy(), adjusted, heights[feasible])
 

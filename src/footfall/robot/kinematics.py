@@ -139,10 +139,7 @@ class LegKinematics:
                 f"out of reach by {excess:.4f} m",
                 excess,
             )
-        cos_knee = np.clip((c_sq - self.L2**2 - self.L3**2) / (2.0 * self.L2 * self.L3), -1.0, 1.0)
-        t3 = -np.arccos(cos_knee)
-        t2 = np.arctan2(z, r) - np.arctan2(self.L3 * np.sin(t3), self.L2 + self.L3 * np.cos(t3))
-        t2 = np.mod(t2 + np.pi, 2.0 * np.pi) - np.pi  # into [-pi, pi)
+        t2, t3 = self._femur_tibia(r, z)
         t1 = np.arctan2(y, x)
         angles = np.stack([t1, t2, t3], axis=-1)
         if check_limits:
@@ -199,16 +196,45 @@ class LegKinematics:
         in_reach = (abs(self.L2 - self.L3) + margin <= reach) & (
             reach <= self.L2 + self.L3 - margin
         )
-        cos_knee = (reach * reach - self.L2**2 - self.L3**2) / (2.0 * self.L2 * self.L3)
-        t3 = -np.arccos(np.clip(cos_knee, -1.0, 1.0))
-        t2 = np.arctan2(z, r) - np.arctan2(self.L3 * np.sin(t3), self.L2 + self.L3 * np.cos(t3))
-        t2 = np.mod(t2 + np.pi, 2.0 * np.pi) - np.pi
+        t2, t3 = self._femur_tibia(r, z)
         slack = margin / self.L3
         low, high = self.lower + slack, self.upper - slack
         ok = in_reach
         for angle, axis in ((np.arctan2(y, x), 0), (t2, 1), (t3, 2)):
             ok = ok & (angle >= low[axis]) & (angle <= high[axis])
         return ok
+
+    def _femur_tibia(
+        self, r: npt.NDArray[np.float64], z: npt.NDArray[np.float64]
+    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """Femur and tibia angles (knee-up) [rad] for a foot ``r`` out from the femur joint.
+
+        The foot is ``z`` above the joint [m]; its distance is clipped into the leg's reach.
+        """
+        cos_knee = (r * r + z * z - self.L2**2 - self.L3**2) / (2.0 * self.L2 * self.L3)
+        t3 = -np.arccos(np.clip(cos_knee, -1.0, 1.0))
+        t2 = np.arctan2(z, r) - np.arctan2(self.L3 * np.sin(t3), self.L2 + self.L3 * np.cos(t3))
+        return np.mod(t2 + np.pi, 2.0 * np.pi) - np.pi, t3  # femur into [-pi, pi)
+
+    def knees_in_body(self, leg: int, feet_in_body: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Where one leg's knee (the femur-tibia joint) is with its foot at each target.
+
+        The knee-up branch, as :meth:`inverse`; a target out of reach puts the knee where
+        the stretched or folded leg pointing at it has it.
+
+        Args:
+            leg: Leg index.
+            feet_in_body: Foot targets in the body frame, shape (..., 3) [m].
+
+        Returns:
+            Knee positions in the body frame, shape (..., 3) [m].
+        """
+        p = np.asarray(feet_in_body, dtype=np.float64) - self.mounts_in_body[leg]
+        d = np.hypot(p[..., 0], p[..., 1])
+        t2, _ = self._femur_tibia(d - self.L1, p[..., 2])
+        out = (self.L1 + self.L2 * np.cos(t2)) / np.maximum(d, _TOLERANCE)
+        knees = np.stack([p[..., 0] * out, p[..., 1] * out, self.L2 * np.sin(t2)], axis=-1)
+        return knees + self.mounts_in_body[leg]
 
     def check_limits(self, angles: npt.ArrayLike) -> None:
         """Raise :class:`UnreachableTargetError` if any angle, shape (6, 3), is out of range."""
