@@ -11,6 +11,7 @@ from footfall.mapping.snapshot import MapSnapshot
 from footfall.planning.terrain_planner import NoFoothold, StepPoses, TerrainPlanner
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
+from footfall.robot.spec import load_spec
 from footfall.scoring.walkability import score_map
 
 RES = 0.02
@@ -208,3 +209,41 @@ def test_a_foothold_whose_knee_would_stand_in_a_block_is_moved(default_spec):
             i, j = ((ring + 1.0) // RES).astype(int).T
             ground = 0.105 if under_knee[i, j].any() else 0.0
             assert point[2] >= ground + spec.foot_radius, (point, ground)
+
+
+def test_a_foot_goes_up_a_step_only_from_a_body_that_can_lift_it_over_the_riser():
+    """A short leg folds up when its foot passes beside the hip: it cannot lift the foot
+    over a riser there unless the body stands high enough. The PhantomX's front feet lift
+    off beside their hips and step onto a 4 cm step whose edge is just ahead: the plan
+    allows only the body heights from which each front leg reaches the point above the
+    edge by the swing clearance, and refuses some at which the legs reach their
+    footholds."""
+    spec = load_spec("phantomx")
+    rise, edge_x = 0.04, 0.18  # the edge on a cell boundary
+    planner = _planner(spec, -_ledge(rise, edge_x))  # up by ``rise`` beyond the edge
+    feet = _standing_feet(spec)
+    feet[FRONT, 0] = 0.11  # lifting off beside the hips
+    nominal = _standing_feet(spec)
+    nominal[FRONT, 0] = 0.25
+    nominal[FRONT, 2] = spec.foot_radius + rise
+    heights = np.arange(0.06, 0.2, 0.005)
+    plan = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), heights)
+    assert not isinstance(plan, NoFoothold), plan
+    np.testing.assert_allclose(plan.targets[FRONT, 2], spec.foot_radius + rise)
+    kin = LegKinematics(spec)
+    lift = planner.config.swing_clearance + spec.foot_radius + rise
+    refused_for_the_swing = 0
+    for z in heights:
+        over_edge = []
+        for leg in np.flatnonzero(FRONT):
+            # Over the top, a little more than a centimetre past the edge: the leg reaches
+            # it more easily than the edge itself, nearer the hip.
+            way = np.linspace(feet[leg, :2], plan.targets[leg, :2], 200)
+            edge = way[np.argmin(np.abs(way[:, 0] - edge_x - 0.015))]
+            over_edge.append(kin.reachable(int(leg), np.array([*edge, lift - z])))
+        reached = all(kin.reachable(leg, plan.targets[leg] - [0.0, 0.0, z]) for leg in range(6))
+        if np.isclose(plan.body_z, z).any():
+            assert all(over_edge), z
+        elif reached and not all(over_edge):
+            refused_for_the_swing += 1
+    assert plan.body_z.size and refused_for_the_swing

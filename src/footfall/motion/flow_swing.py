@@ -25,6 +25,7 @@ import numpy.typing as npt
 
 from footfall.checks import require_non_negative, require_positive
 from footfall.motion.swing import PolylineSwing, SwingPlan, TerrainFunction
+from footfall.planning.leg_clearance import SWING_END_RADIUS_M
 
 
 @dataclass(frozen=True)
@@ -161,7 +162,7 @@ def raise_over(
     path: npt.NDArray[np.float64],
     terrain: TerrainFunction,
     clearance: float,
-    end_radius: float = 0.03,
+    end_radius: float = SWING_END_RADIUS_M,
 ) -> npt.NDArray[np.float64]:
     """Lift a path so it clears the terrain under it by ``clearance``.
 

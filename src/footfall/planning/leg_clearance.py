@@ -6,7 +6,9 @@ standing foot the knee sweeps forwards or backwards over the terrain next to it.
 ramp, a box or a step up the knee then runs into the slope, tips the robot over the feet that
 stand and drags them along. The walking controller never sees the collision; the feet land
 where the body's estimate no longer is. This module checks the leg's upper points (the knee
-and the middle of the tibia) against the mapped terrain through the stance.
+and the middle of the tibia) against the mapped terrain through the stance, and the foot's
+way to its foothold: a short leg folds up as its foot passes beside the hip and cannot lift
+it over a riser there from a body standing too low.
 """
 
 from __future__ import annotations
@@ -24,6 +26,11 @@ from footfall.robot.planar import PlanarPose
 # the foot: the knee and the middle of the tibia (the lower half stands over the foothold's
 # own edge margin).
 TIBIA_FRACTIONS = (0.0, 0.5)
+# A swing's way is checked at this many points (a centimetre apart on a long step); within
+# SWING_END_RADIUS_M of either end the path stands over the footholds themselves and is not
+# checked (as the swing paths do) [m].
+SWING_SAMPLES = 24
+SWING_END_RADIUS_M = 0.03
 
 
 def midway(a: PlanarPose, b: PlanarPose) -> PlanarPose:
@@ -66,4 +73,68 @@ def legs_clear_heights(
             point[..., 2] += heights
             under = terrain_under(point[..., :2].reshape(-1, 2)).reshape(ok.shape)
             ok &= point[..., 2] >= under + clearance
+    return ok
+
+
+def _reach_heights(
+    kinematics: LegKinematics,
+    leg: int,
+    points: npt.NDArray[np.float64],
+    pose: PlanarPose,
+    heights: npt.NDArray[np.float64],
+) -> npt.NDArray[np.bool_]:
+    """Whether the leg reaches world points, shape (n, 3), from one pose at each height."""
+    in_body = np.repeat(pose.points_to_body(points)[:, None, :], len(heights), axis=1)
+    in_body[..., 2] -= heights
+    return np.asarray(kinematics.reachable(leg, in_body))
+
+
+def swing_reach_heights(
+    kinematics: LegKinematics,
+    terrain_under: Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float64]],
+    leg: int,
+    start: npt.NDArray[np.float64],
+    ends: npt.NDArray[np.float64],
+    poses: tuple[PlanarPose, ...],
+    heights: npt.NDArray[np.float64],
+    lift: float,
+) -> npt.NDArray[np.bool_]:
+    """At which body heights the leg can lift its foot over the terrain to each end.
+
+    The swing path clears the mapped terrain on its way (beyond ``SWING_END_RADIUS_M`` of
+    either end, as the path does): at every point of the way where that lifts the foot
+    above the straight line between its ends, the leg must reach the foot from one of the
+    poses (the body now or at touchdown).
+
+    Args:
+        kinematics: The robot's leg kinematics.
+        terrain_under: As for :func:`legs_clear_heights`.
+        leg: Leg index.
+        start: Where the foot lifts off, shape (3,) [m].
+        ends: Candidate foot centres, shape (m, 3) [m].
+        poses: Body poses the foot may be lifted from.
+        heights: Body heights in the world, shape (k,) [m].
+        lift: Least height of the foot's centre above the terrain on the way [m].
+
+    Returns:
+        Shape (m, k).
+    """
+    fraction = np.linspace(0.0, 1.0, SWING_SAMPLES)
+    way = ends[:, None, :] - start
+    points = start + fraction[None, :, None] * way  # (m, n, 3): the straight line
+    length = np.linalg.norm(way[..., :2], axis=2)
+    far = (fraction * length > SWING_END_RADIUS_M) & (
+        (1.0 - fraction) * length > SWING_END_RADIUS_M
+    )
+    need = terrain_under(points[..., :2].reshape(-1, 2)).reshape(far.shape) + lift
+    lifted = far & np.isfinite(need) & (need > points[..., 2])
+    ok = np.ones((len(ends), len(heights)), dtype=bool)
+    if not lifted.any():
+        return ok
+    over = points[lifted]
+    over[:, 2] = need[lifted]
+    reached = np.zeros((len(over), len(heights)), dtype=bool)
+    for pose in poses:
+        reached |= _reach_heights(kinematics, leg, over, pose, heights)
+    np.logical_and.at(ok, np.nonzero(lifted)[0], reached)
     return ok

@@ -24,7 +24,7 @@ from footfall.planning.footholds import (
     point_in_polygon_margin,
     registration_margin_cells,
 )
-from footfall.planning.leg_clearance import legs_clear_heights, midway
+from footfall.planning.leg_clearance import legs_clear_heights, midway, swing_reach_heights
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
@@ -238,22 +238,22 @@ class TerrainPlanner:
         )
         # Its leg clears the terrain while the foot stands, from touchdown to lift-off.
         stance_poses = (poses.touchdown, midway(poses.touchdown, poses.liftoff), poses.liftoff)
-        link_clearance = self.spec.foot_radius + c.min_body_clearance
+        kin, under, r_link = self.kinematics, self.terrain_under, self.spec.foot_radius
         for leg in (int(k) for k in np.flatnonzero(swinging)):
 
             def reached_at(
                 centres: npt.NDArray[np.float64], leg: int = leg
             ) -> npt.NDArray[np.bool_]:
-                """Heights at which the leg reaches each foot centre and clears the terrain."""
+                """Heights at which the leg reaches, swings to and stands on each centre."""
                 reach = self._reach_heights(leg, centres, reach_poses, heights, c.reach_margin)
+                lift = c.swing_clearance + r_link
+                swing_poses = (poses.now, poses.touchdown)
+                reach &= swing_reach_heights(
+                    kin, under, leg, feet[leg], centres, swing_poses, heights, lift
+                )
+                clearance = r_link + c.min_body_clearance
                 return reach & legs_clear_heights(
-                    self.kinematics,
-                    self.terrain_under,
-                    leg,
-                    centres,
-                    stance_poses,
-                    heights,
-                    link_clearance,
+                    kin, under, leg, centres, stance_poses, heights, clearance
                 )
 
             def first_accepted(
