@@ -145,3 +145,76 @@ def test_a_swing_past_the_coxa_range_is_turned_back(default_spec, overshoot_deg)
         np.degrees(kin.upper[0]), abs=0.1
     )
     np.testing.assert_allclose(fixed[1:], feet[1:])  # other legs untouched
+
+
+def test_the_body_height_waits_for_a_swinging_foot_to_land_within_reach(default_spec):
+    """A swinging foot lands where it is sent (back where it lifted off, when a re-plan
+    found no foothold). Asked to rise, the body rises while that landing point stays within
+    the leg's reach, and waits once it would leave it, instead of landing the foot on a
+    stretched leg that no command could bring back."""
+    from footfall.robot.kinematics import LegKinematics
+
+    kin = LegKinematics(default_spec)
+    controller = WalkController(default_spec)
+    controller.state = GaitState.STEPPING
+    back = 2
+    controller.swinging[back] = True
+    # The landing point: straight out from the hip, reached from the body now but not from
+    # a body 3 cm higher.
+    start = controller.feet_in_body()
+    direction = start[back, :2] - kin.mounts_in_body[back, :2]
+    direction /= np.linalg.norm(direction)
+    landing = start[back].copy()
+    while kin.reachable(back, landing - [0.0, 0.0, 0.03]):
+        landing[:2] += 0.002 * direction
+    assert kin.reachable(back, landing)
+    landing_in_world = controller.pose.points_to_world(landing[None])[0]
+    landing_in_world[2] += controller.height
+    controller.footholds.plan.targets = controller.feet_in_world.copy()
+    controller.footholds.plan.targets[back] = landing_in_world
+    command = WalkCommand(speed=0.0, body_height=controller.height + 0.06)
+    height = controller.height
+    for _ in range(100):
+        controller._move_body(command, DT)
+        target = controller.pose.points_to_body(landing_in_world[None])[0]
+        target[2] -= controller.height
+        assert kin.reachable(back, target)
+    waited = controller.height
+    assert height < waited < command.body_height - 0.005  # it rose, then waited
+    near = landing_in_world.copy()
+    near[:2] -= 0.03 * direction  # a landing point well within reach
+    controller.footholds.plan.targets[back] = near
+    controller._move_body(command, DT)
+    assert controller.height > waited  # it rises on
+
+
+def test_a_supporting_foot_near_the_edge_of_its_reach_does_not_hold_the_body_down(default_spec):
+    """A supporting foot waits for the body only at the edge of its leg's reach, not at the
+    planner's margin inside it: a hind foot left at the foot of a ramp, its leg stretched
+    within the margin, lets the body climb on as long as the leg still reaches it."""
+    from footfall.planning.terrain_planner import TerrainPlanner
+    from footfall.robot.kinematics import LegKinematics
+
+    kin = LegKinematics(default_spec)
+    controller = WalkController(default_spec, planner=TerrainPlanner(default_spec))
+    controller.state = GaitState.STEPPING
+    back = 2
+    margin = controller.footholds.reach_margin
+    assert margin
+    feet = controller.feet_in_body()
+    direction = feet[back, :2] - kin.mounts_in_body[back, :2]
+    direction /= np.linalg.norm(direction)
+    # Out along the leg until a 5 mm rise takes it inside the margin, not out of reach.
+    foot = feet[back].copy()
+    while kin.reachable(back, foot - [0.0, 0.0, 0.005], margin):
+        foot[:2] += 0.001 * direction
+    assert kin.reachable(back, foot, margin) and kin.reachable(back, foot - [0.0, 0.0, 0.01])
+    foot_in_world = controller.pose.points_to_world(foot[None])[0]
+    foot_in_world[2] += controller.height
+    controller.feet_in_world[back] = foot_in_world
+    controller.footholds.plan.targets = controller.feet_in_world.copy()
+    command = WalkCommand(speed=0.0, body_height=controller.height + 0.01)
+    height = controller.height
+    for _ in range(50):
+        controller._move_body(command, DT)
+    assert controller.height > height + 0.009

@@ -300,14 +300,24 @@ class WalkController:
         limit = self.config.height_rate_limit * dt
         dh = float(np.clip(dh, -limit, limit))
         if dh != 0.0 and self.state is GaitState.STEPPING:
-            # Stepping, the height waits while a supporting foot would leave its leg's reach:
-            # the foot lifts soon, and the body goes on once it has. (Standing, a height no
-            # leg reaches freezes the robot with the reason.)
+            # Stepping, the height waits while a foot would leave its leg's reach where it
+            # stands or, swinging, where it will land: a supporting foot lifts soon, and the
+            # body goes on once it has. (Standing, a height no leg reaches freezes the robot
+            # with the reason.) A foot sent back to where it lifted off, the body stopping
+            # for want of a foothold, lands where the body has left it room.
             feet = self.feet_in_body()
-            stance = ~self.swinging
-            before = self.kinematics.reachable_all(feet)
-            feet[:, 2] -= dh
-            if np.any(stance & before & ~self.kinematics.reachable_all(feet)):
+            landing = self.pose.points_to_body(self.footholds.plan.targets)
+            landing[:, 2] -= self.height
+            feet[self.swinging] = landing[self.swinging]
+            after = feet.copy()
+            after[:, 2] -= dh
+            # A landing target also keeps the planner's reach margin, which the feedback's
+            # corrections take up once the foot stands.
+            reach = self.kinematics.reachable_all
+            margin = self.footholds.reach_margin or 0.0
+            leaves = reach(feet) & ~reach(after)
+            leaves |= self.swinging & reach(feet, margin) & ~reach(after, margin)
+            if np.any(leaves):
                 dh = 0.0
         self.height += dh
 
