@@ -78,9 +78,10 @@ def test_a_bus_fault_stops_the_walk_within_0_2_s(fault, reason) -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("terrain", ["stairs", "cobblestones"])
-@pytest.mark.parametrize(("bus", "robot"), [("protocol1", "default"), ("protocol2", "default")])
+@pytest.mark.parametrize(("bus", "robot"), [("protocol1", "phantomx"), ("protocol2", "default")])
 def test_the_robot_crosses_over_the_servo_bus(tmp_path, terrain, bus, robot) -> None:
-    """Stairs and cobblestones crossed on the emulated bus: goal, no fall, no invalid foothold."""
+    """Stairs and cobblestones crossed on the emulated bus, the PhantomX on its AX-12A's
+    Protocol 1.0 and the default robot on Protocol 2.0: goal, no fall, no invalid foothold."""
     m = walk(tmp_path, "--servo-bus", bus, "--robot", robot, "--terrain", terrain, "--seed", "3")
     assert m["reached_goal"] and not m["fell"] and m["invalid_footholds"] == 0
     assert m["servo_bus"]["errors"] == 0 and m["servo_bus"]["utilisation"] < 0.7
