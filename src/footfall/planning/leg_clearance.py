@@ -76,17 +76,33 @@ def legs_clear_heights(
     return ok
 
 
-def _reach_heights(
+def reach_heights(
     kinematics: LegKinematics,
     leg: int,
     points: npt.NDArray[np.float64],
-    pose: PlanarPose,
+    poses: tuple[PlanarPose, ...],
     heights: npt.NDArray[np.float64],
+    margin: float = 0.0,
 ) -> npt.NDArray[np.bool_]:
-    """Whether the leg reaches world points, shape (n, 3), from one pose at each height."""
-    in_body = np.repeat(pose.points_to_body(points)[:, None, :], len(heights), axis=1)
-    in_body[..., 2] -= heights
-    return np.asarray(kinematics.reachable(leg, in_body))
+    """At which body heights the leg reaches world points from every pose.
+
+    Args:
+        kinematics: The robot's leg kinematics.
+        leg: Leg index.
+        points: World point, shape (3,), or several, shape (..., 3) [m].
+        poses: Body poses.
+        heights: Body heights in the world, shape (k,) [m].
+        margin: Workspace margin [m].
+
+    Returns:
+        Shape (k,) for one point, else (..., k).
+    """
+    ok = np.ones((*np.shape(points)[:-1], len(heights)), dtype=bool)
+    for pose in poses:
+        in_body = np.repeat(pose.points_to_body(points)[..., None, :], len(heights), axis=-2)
+        in_body[..., 2] -= heights
+        ok &= kinematics.reachable(leg, in_body, margin)
+    return ok
 
 
 def swing_reach_heights(
@@ -135,6 +151,6 @@ def swing_reach_heights(
     over[:, 2] = need[lifted]
     reached = np.zeros((len(over), len(heights)), dtype=bool)
     for pose in poses:
-        reached |= _reach_heights(kinematics, leg, over, pose, heights)
+        reached |= reach_heights(kinematics, leg, over, (pose,), heights)
     np.logical_and.at(ok, np.nonzero(lifted)[0], reached)
     return ok

@@ -24,7 +24,12 @@ from footfall.planning.footholds import (
     point_in_polygon_margin,
     registration_margin_cells,
 )
-from footfall.planning.leg_clearance import legs_clear_heights, midway, swing_reach_heights
+from footfall.planning.leg_clearance import (
+    legs_clear_heights,
+    midway,
+    reach_heights,
+    swing_reach_heights,
+)
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
@@ -245,7 +250,7 @@ class TerrainPlanner:
                 centres: npt.NDArray[np.float64], leg: int = leg
             ) -> npt.NDArray[np.bool_]:
                 """Heights at which the leg reaches, swings to and stands on each centre."""
-                reach = self._reach_heights(leg, centres, reach_poses, heights, c.reach_margin)
+                reach = reach_heights(kin, leg, centres, reach_poses, heights, c.reach_margin)
                 lift = c.swing_clearance + r_link
                 swing_poses = (poses.now, poses.touchdown)
                 reach &= swing_reach_heights(
@@ -308,33 +313,6 @@ class TerrainPlanner:
             adjusted[leg] = foothold.moved > 1e-9
         return FootholdPlan(targets, nominal.copy(), adjusted, heights[feasible])
 
-    def _reach_heights(
-        self,
-        leg: int,
-        foot: npt.NDArray[np.float64],
-        poses: tuple[PlanarPose, ...],
-        heights: npt.NDArray[np.float64],
-        margin: float,
-    ) -> npt.NDArray[np.bool_]:
-        """At which body heights the leg reaches world points from every pose.
-
-        Args:
-            leg: Leg index.
-            foot: World point, shape (3,), or several, shape (..., 3) [m].
-            poses: Body poses.
-            heights: Body heights in the world, shape (k,) [m].
-            margin: Workspace margin [m].
-
-        Returns:
-            Shape (k,) for one point, else (..., k).
-        """
-        ok = np.ones((*np.shape(foot)[:-1], len(heights)), dtype=bool)
-        for pose in poses:
-            in_body = np.repeat(pose.points_to_body(foot)[..., None, :], len(heights), axis=-2)
-            in_body[..., 2] -= heights
-            ok &= self.kinematics.reachable(leg, in_body, margin)
-        return ok
-
     def _stance_heights(
         self,
         feet: npt.NDArray[np.float64],
@@ -353,7 +331,7 @@ class TerrainPlanner:
         for pose_set, m in (((poses.now, poses.touchdown), margin), ((poses.now,), 0.0)):
             ok = np.ones(len(heights), dtype=bool)
             for leg in legs:
-                ok &= self._reach_heights(int(leg), feet[leg], pose_set, heights, m)
+                ok &= reach_heights(self.kinematics, int(leg), feet[leg], pose_set, heights, m)
             if ok.any():
                 break
         return ok
