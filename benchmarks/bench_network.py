@@ -1,8 +1,9 @@
 """Latency and bandwidth of the robot on the network: two processes over zenoh on loopback.
 
 Starts ``footfall robot --sim stairs`` in its own process (every topic sent at full rate:
-depth and map updates at 15 Hz, 320 x 240 depth) and acts as the station in this one:
-switches it to walking, commands it forward at 10 Hz, and measures
+depth and map updates at 15 Hz, 320 x 240 depth; unpacked unless ``--radio``) and acts
+as the station in this one: switches it to walking, commands it forward at 10 Hz, and
+measures
 
 - the latency from a depth frame's capture to the map update that includes it arriving
   here (stamps are the robot's controller time; the wall time it counts from is estimated
@@ -54,10 +55,13 @@ def free_port() -> int:
 def main() -> dict[str, object]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=20.0, help="walking time measured")
+    parser.add_argument(
+        "--radio", action="store_true", help="the robot's packed radio link (default: unpacked)"
+    )
     args = parser.parse_args()
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     full = ("map", "state", "status", "joint_targets", "effector_targets")
-    rates = [f"--rate={t}=all" for t in full]
+    rates = [f"--rate={t}=all" for t in full] + ([] if args.radio else ["--full-precision"])
     with tempfile.TemporaryDirectory() as out:
         robot = subprocess.Popen(
             [sys.executable, "-m", "footfall.cli", "robot", "--sim", "stairs", "--listen"]

@@ -40,6 +40,7 @@ from footfall.messages import (
     decode,
     message_types,
 )
+from footfall.messages.wire import LinkAck, PackedColor, PackedDepth, PackedMap, WholeMapRequest
 from footfall.robot.planar import PlanarPose
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
@@ -49,6 +50,11 @@ finite = st.floats(-1e6, 1e6, allow_nan=False)
 
 def _pose(rng: np.random.Generator) -> Pose:
     return Pose(rng.normal(size=3), Rotation.from_quat(rng.normal(size=4)))
+
+
+def b_(rng: np.random.Generator) -> np.ndarray:
+    """Packed bytes: a uint8 array."""
+    return rng.integers(0, 256, 37, dtype=np.uint8)
 
 
 def examples(rng: np.random.Generator) -> list:
@@ -152,6 +158,15 @@ def examples(rng: np.random.Generator) -> list:
         ColorImage(0.25, rng.integers(0, 255, (48, 64, 3), dtype=np.uint8), 7),
         Ack(False, "the goal lies inside an obstacle"),
         ImuReading(0.25, rng.normal(size=3), np.array([0.1, -0.2, 9.81])),
+        PackedMap(3.0, 6, 0, (-2.56, 1.28), 0.02, 16, 16, -120, True, b_(rng)),
+        PackedMap(3.2, 7, 6, (-2.5, 1.3), 0.02, 16, 16, -120, False, b_(rng), 41, 1.7e9),
+        PackedDepth(0.5, 9, camera, _pose(rng), b_(rng), 42, 1.7e9),
+        PackedColor(0.5, 9, b_(rng)),
+        LinkAck(42, 1.7e9, "a0f3"),
+        WholeMapRequest(1.7e9, "a0f3"),
+        MapUpdate(
+            3.0, 5, heights, heights > 0, None, None, None, heights, heights > 0, (0.0, 0.0), 0.02
+        ),
         BipedStatus(
             3.5,
             "stopping",

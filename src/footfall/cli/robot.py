@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 from pathlib import Path
 
@@ -140,6 +141,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--seconds", type=float, default=600.0, help="longest run in seconds")
     p.add_argument("--stop-at-goal", action="store_true", help="end the run at the goal")
     p.add_argument(
+        "--full-precision",
+        action="store_true",
+        help="send the map, depth and colour as the robot holds them (a wired network) "
+        "rather than packed for a radio link and paced by the station's acknowledgements",
+    )
+    p.add_argument(
         "--rate",
         action="append",
         default=[],
@@ -183,6 +190,11 @@ def _ready(console: Console, args: argparse.Namespace, what: str):
     return ready
 
 
+def _robot_network(args: argparse.Namespace):
+    """The robot's zenoh settings: packed for a radio link unless --full-precision."""
+    return dataclasses.replace(network_config(args), radio=not args.full_precision)
+
+
 def _rates(items: list[str]) -> dict[str, float | None]:
     from footfall.sim.robot import OUTGOING
 
@@ -209,7 +221,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
             map=args.map,
             cloud=args.cloud,
             room=args.room,
-            network=network_config(args),
+            network=_robot_network(args),
             seconds=args.seconds,
         )
         what = "biped planning" if args.room is None else "Archie walking in MuJoCo"
@@ -264,7 +276,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
             camera=None if camera == "none" else camera,
             pose=pose,
         ),
-        network=network_config(args),
+        network=_robot_network(args),
         seconds=args.seconds,
         stop_at_goal=args.stop_at_goal,
         rates=_rates(args.rate),

@@ -253,8 +253,9 @@ class MapUpdate(Message):
         known: Cells observed.
         spread: Largest in-frame height range of each cell [m], NaN where unknown; None
             when the map keeps none.
-        slope: Height gradient, rise over run; NaN where unknown.
-        proximity: Edge proximity [m]; NaN where unknown.
+        slope: Height gradient, rise over run; NaN where unknown. None when the map came
+            over a radio link, which carries only what the station draws.
+        proximity: Edge proximity [m]; NaN where unknown. None as ``slope``.
         score: Walkability score (lower is better); NaN where unknown.
         valid: Cells a foot may use.
         origin: World ``(x, y)`` of the corner of cell ``[0, 0]`` [m].
@@ -262,14 +263,15 @@ class MapUpdate(Message):
     """
 
     TOPIC = "map"
+    VERSION = 2  # slope and proximity may be absent (a radio link's map)
 
     stamp: float
     sequence: int
     heights: npt.NDArray[np.float64]
     known: npt.NDArray[np.bool_]
     spread: npt.NDArray[np.float64] | None
-    slope: npt.NDArray[np.float64]
-    proximity: npt.NDArray[np.float64]
+    slope: npt.NDArray[np.float64] | None
+    proximity: npt.NDArray[np.float64] | None
     score: npt.NDArray[np.float64]
     valid: npt.NDArray[np.bool_]
     origin: tuple[float, float]

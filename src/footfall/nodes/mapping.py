@@ -20,6 +20,7 @@ from collections import deque
 
 import numpy as np
 
+from footfall.errors import MessageError
 from footfall.mapping.engine import HeightMapConfig, MapEngine, open_map
 from footfall.mapping.snapshot import MapSnapshot
 from footfall.messages import DepthFrame, GroundPrior, LogLine, MapUpdate, PoseEstimate
@@ -87,7 +88,16 @@ def snapshot_of(update: MapUpdate) -> MapSnapshot:
 
 
 def scores_of(update: MapUpdate) -> ScoreMap:
-    """The score map a map update carries."""
+    """The score map a map update carries.
+
+    Raises:
+        MessageError: The update came over a radio link without its slope and proximity.
+    """
+    if update.slope is None or update.proximity is None:
+        raise MessageError(
+            f"map update {update.sequence} carries no slope or proximity (a radio link's map, "
+            "for drawing): a planner needs the robot's own map"
+        )
     return ScoreMap(
         update.slope,
         update.proximity,

@@ -56,10 +56,13 @@ class Bridge:
     def _sender(self, topic: str, rate: float | None) -> Callable[[Message], None]:
         def send(message: Message) -> None:
             if rate is not None:
-                now = self.clock()
-                if now < self._next[topic]:
+                now, slot, period = self.clock(), self._next[topic], 1.0 / rate
+                if now < slot:
                     return
-                self._next[topic] = now + 1.0 / rate
+                # The next slot follows this one's, not this message's arrival, so messages
+                # that come more often than the rate go at the rate on average (the first
+                # after a pause starts the slots afresh).
+                self._next[topic] = (now if now - slot > period else slot) + period
             self.remote.publish(topic, message)
             self.forwarded[topic] += 1
 

@@ -9,6 +9,11 @@ spins), in arrival order. A message that does not decode, or whose subscriber ra
 dropped, counted in :attr:`ZenohBus.malformed` or :attr:`ZenohBus.failed` and logged on the
 ``log`` topic: a bad message never brings a node down.
 
+With ``radio``, the map, depth and colour go packed for a radio link, within what the
+link delivers (:mod:`footfall.runtime.link`); every bus unpacks and acknowledges what
+arrives packed, so a subscriber sees the usual messages. Each topic's publisher has the
+priority of :data:`~footfall.runtime.link.PRIORITIES`.
+
 Safe defaults: only the endpoints asked for, loopback unless ``allow_remote`` says
 otherwise, and no multicast scouting unless asked for. TLS and user/password
 authentication come from a zenoh configuration file (JSON5), which the options here extend
@@ -30,7 +35,9 @@ import zenoh
 from footfall.errors import ConfigError, MessageError
 from footfall.messages import LogLine
 from footfall.messages.codec import Message, decode
+from footfall.messages.wire import LinkAck, WholeMapRequest
 from footfall.runtime.bus import Callback, Handler, ServiceError, TopicStats
+from footfall.runtime.link import BULK, PRIORITIES, LinkReceiver, LinkSender
 
 KEY_PREFIX = "footfall"
 
@@ -72,6 +79,8 @@ class ZenohConfig:
         allow_remote: Allow listening on addresses other than loopback.
         config_file: A zenoh configuration file (JSON5) to start from: TLS certificates,
             user/password authentication, and anything else zenoh offers.
+        radio: Send the map, depth and colour packed for a radio link, paced by the
+            receivers' acknowledgements (``docs/runtime.md``).
     """
 
     robot: str = "hexapod"
@@ -80,6 +89,7 @@ class ZenohConfig:
     scouting: bool = False
     allow_remote: bool = False
     config_file: Path | None = None
+    radio: bool = False
 
     def __post_init__(self) -> None:
         if not self.robot or "/" in self.robot or any(c in self.robot for c in "*$#?"):
@@ -137,6 +147,12 @@ class ZenohBus:
         self._services: dict[str, Handler] = {}
         self._queryables: list[zenoh.Queryable] = []
         self._last: dict[str, Message] = {}
+        self.link_receiver = LinkReceiver(self.publish, receiver=str(self.session.zid()))
+        self.link_sender: LinkSender | None = None
+        if self.config.radio:
+            self.link_sender = sender = LinkSender(self._put)
+            self.subscribe(LinkAck.TOPIC, sender.acknowledged)
+            self.subscribe(WholeMapRequest.TOPIC, sender.whole_map_wanted)
 
     # Keys ----------------------------------------------------------------------------------
     def key(self, topic: str) -> str:
@@ -155,15 +171,31 @@ class ZenohBus:
 
     # Publish / subscribe ---------------------------------------------------------------------
     def publish(self, topic: str, message: Message) -> None:
-        """Send ``message`` on ``topic`` (to this process's subscribers too)."""
-        data = message.encode()
+        """Send ``message`` on ``topic`` (to this process's subscribers too).
+
+        On a radio bus a map, depth image or colour image waits its turn on the link
+        (:class:`~footfall.runtime.link.LinkSender`) and goes packed.
+        """
+        self._last[topic] = message
+        bulk = BULK.get(topic)
+        if self.link_sender is not None and bulk is not None and isinstance(message, bulk):
+            self.link_sender.offer(topic, message)
+        else:
+            self._put(topic, message.encode())
+
+    def _put(self, topic: str, data: bytes) -> None:
         publisher = self._publishers.get(topic)
         if publisher is None:
-            publisher = self._publishers[topic] = self.session.declare_publisher(self.key(topic))
+            priority, express = PRIORITIES.get(topic, ("DATA", False))
+            publisher = self._publishers[topic] = self.session.declare_publisher(
+                self.key(topic),
+                priority=getattr(zenoh.Priority, priority),
+                congestion_control=zenoh.CongestionControl.DROP,
+                express=express,
+            )
         stats = self.stats[topic]
         stats.messages += 1
         stats.bytes += len(data)
-        self._last[topic] = message
         publisher.put(data)
 
     def publish_bytes(self, topic: str, data: bytes) -> None:
@@ -211,14 +243,17 @@ class ZenohBus:
         try:
             item = self._inbox.get(timeout=timeout) if timeout > 0 else self._inbox.get_nowait()
         except queue.Empty:
-            return 0
-        while True:
+            item = None
+        while item is not None:
             self._handle(item)
             handled += 1
             try:
                 item = self._inbox.get_nowait()
             except queue.Empty:
-                return handled
+                item = None
+        if self.link_sender is not None:
+            self.link_sender.flush()
+        return handled
 
     def _handle(self, item: tuple) -> None:
         kind, name, payload = item
@@ -229,10 +264,12 @@ class ZenohBus:
         received.messages += 1
         received.bytes += len(payload)
         try:
-            message = decode(payload)
+            message = self.link_receiver.unpack(name, decode(payload))
         except MessageError as exc:
             self._counts.malformed[name] += 1
             self._log("warning", f"{name}: dropped a malformed message ({exc})")
+            return
+        if message is None:  # changes to a map not at hand: a whole one was asked for
             return
         for callback in tuple(self._subscribers.get(name, ())):
             self._call(name, callback, message)

@@ -16,7 +16,9 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from footfall.messages import Mode, ModeCommand, Posture
+import numpy as np
+
+from footfall.messages import Mode, ModeCommand, Posture, WalkCommand
 from footfall.nodes.movement import COMMAND_TIMEOUT_S
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bridge import Bridge
@@ -28,12 +30,13 @@ from footfall.sim.terrains import make_terrain
 from footfall.sim.walk_metrics import BridgeTraffic
 from footfall.sim.walk_settings import WalkResult, WalkSettings
 
-# What the robot sends out, and at most how often [Hz] (None: every message).
+# What the robot sends out, and at most how often [Hz] (None: every message). The map
+# goes at half the camera's 15 Hz: a station draws it at 5 Hz.
 OUTGOING: dict[str, float | None] = {
     "depth": None,
     "color": 5.0,
     "pose": None,
-    "map": 5.0,
+    "map": 7.5,
     "status": 20.0,
     "state": 20.0,
     "log": None,
@@ -43,6 +46,8 @@ OUTGOING: dict[str, float | None] = {
     "servo": None,
 }
 INCOMING = ("command", "mode")
+# Stamps past this are wall-clock times (2001 onwards), not simulated seconds [s].
+WALL_CLOCK_EPOCH_S = 1e9
 # Asked to stop, the robot sits down for at most this long before the run ends [s].
 SIT_DOWN_SECONDS = 5.0
 
@@ -105,6 +110,7 @@ def run_robot(
         robot.graph.movement.transport_dropped = lambda: sum(network.malformed.values())
     scheduler = WallClockScheduler(walk.control_rate_hz)
     dt = scheduler.period
+    latency = CommandLatency(local)
 
     asked_to_stop: list[float] = []
 
@@ -117,6 +123,7 @@ def run_robot(
             return seated or t - asked_to_stop[0] > SIT_DOWN_SECONDS
         bridge.spin()
         robot.step(t, dt)
+        latency.acted_on()
         if on_tick is not None:
             on_tick(t + dt)
         if should_stop is not None and should_stop():
@@ -132,5 +139,48 @@ def run_robot(
     finally:
         robot.close()
     result = robot.result(judge, time.perf_counter() - wall_start, scheduler)
-    result.metrics.bridge = BridgeTraffic(dict(bridge.forwarded), dict(bridge.received))
+    sender = getattr(network, "link_sender", None)
+    result.metrics.bridge = BridgeTraffic(
+        dict(bridge.forwarded),
+        dict(bridge.received),
+        link=sender.counts.to_json() if sender is not None else None,
+        command_latency_ms=latency.summary(),
+    )
     return result, bridge
+
+
+class CommandLatency:
+    """How long a station's commands take to reach the joints.
+
+    A command stamped with the station's wall clock counts from that stamp to the end of
+    the tick that delivered it, when the joint targets computed with it have gone to the
+    backend (the two clocks agree on one machine, or with NTP across two).
+    """
+
+    def __init__(self, local: InProcessBus) -> None:
+        self._arrived: list[float] = []
+        self.latencies_s: list[float] = []
+        local.subscribe(WalkCommand.TOPIC, self._arrive)
+
+    def _arrive(self, command: WalkCommand) -> None:
+        if command.stamp > WALL_CLOCK_EPOCH_S:  # a wall-clock stamp, not simulated time
+            self._arrived.append(command.stamp)
+
+    def acted_on(self) -> None:
+        """The tick's joint targets went out: the commands it delivered were acted on."""
+        if self._arrived:
+            now = time.time()
+            self.latencies_s += [now - stamp for stamp in self._arrived]
+            self._arrived.clear()
+
+    def summary(self) -> dict[str, float] | None:
+        """Median, 95th percentile and largest latency [ms], and how many commands."""
+        if not self.latencies_s:
+            return None
+        ms = np.asarray(self.latencies_s) * 1000.0
+        return {
+            "median": float(np.median(ms)),
+            "p95": float(np.percentile(ms, 95)),
+            "max": float(ms.max()),
+            "count": len(ms),
+        }

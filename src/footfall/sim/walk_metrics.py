@@ -179,10 +179,18 @@ class BridgeTraffic:
     Attributes:
         bridge_forwarded: Sent out to the network.
         bridge_received: Taken in from it.
+        link: The radio link's sending end (``runtime/link.py``): per bulk topic the
+            messages sent, their bytes, those dropped for a newer one; whole maps sent;
+            messages acknowledged. None on a full-precision link.
+        command_latency_ms: From a station's command (its wall-clock stamp) to the first
+            joint targets computed with it: ``median``, ``p95``, ``max`` [ms] and ``count``;
+            None when no command came.
     """
 
     bridge_forwarded: dict[str, int]
     bridge_received: dict[str, int]
+    link: dict | None = None
+    command_latency_ms: dict[str, float] | None = None
 
 
 @dataclass(frozen=True)
