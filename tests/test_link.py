@@ -147,7 +147,11 @@ def test_changes_to_a_whole_map_not_received_ask_for_one_and_are_not_guessed():
         assert receiver.unpack("map", packed) is None
     asks = [m for m in sent if isinstance(m, WholeMapRequest)]
     assert len(asks) == 1 and receiver.waiting_for_whole == 2
-    assert [m.link_sequence for m in sent if isinstance(m, LinkAck)] == [2, 3]
+    receiver.acknowledge()  # both arrivals in one acknowledgement
+    acks = [m.link_sequences.tolist() for m in sent if isinstance(m, LinkAck)]
+    assert acks == [[2, 3]]
+    receiver.acknowledge()  # nothing new: nothing sent
+    assert len([m for m in sent if isinstance(m, LinkAck)]) == 1
     packer.want_whole = True  # as the robot's sender does on the request
     update = random_map(rng, 32, (1, 0), 4)
     assert_within_quantisation(receiver.unpack("map", packer.pack(update)), update)
@@ -205,6 +209,11 @@ def test_colour_crosses_as_jpeg_and_a_broken_one_is_refused():
         unpack_color(PackedColor(2.0, 9, np.frombuffer(b"not a jpeg", np.uint8)))
 
 
+def ack(*sequences: int, at: float) -> LinkAck:
+    """A station's acknowledgement of ``sequences``."""
+    return LinkAck(np.asarray(sequences, np.int64), at, "station")
+
+
 class Wire:
     """What a sender put on the link, and a clock."""
 
@@ -245,7 +254,7 @@ def test_a_slow_link_gets_fewer_images_not_older_ones_and_the_map_goes_first():
     rng, wire = np.random.default_rng(5), Wire()
     sender = LinkSender(wire.put, clock=lambda: wire.now)
     sender.offer("depth", depth_frame(rng, 0))
-    sender.acknowledged(LinkAck(1, wire.now, "station"))  # a station is listening
+    sender.acknowledged(ack(1, at=wire.now))  # a station is listening
     assert sender.flow_controlled
     sent_before = len(wire.sent)
     for k in range(1, 6):
@@ -256,7 +265,7 @@ def test_a_slow_link_gets_fewer_images_not_older_ones_and_the_map_goes_first():
     sender.offer("map", random_map(rng, 64, (0, 0), 1))
     assert len(wire.sent) == sent_before + 1
     wire.now += 0.2
-    sender.acknowledged(LinkAck(2, wire.now, "station"))
+    sender.acknowledged(ack(2, at=wire.now))
     assert wire.topics()[sent_before + 1 :] == ["map", "depth"]  # the map first
     assert decode(wire.sent[-1][1]).sequence == 5  # the newest frame, not a stale one
 
@@ -267,7 +276,7 @@ def test_an_unacknowledged_message_stops_counting_as_in_flight():
     rng, wire = np.random.default_rng(6), Wire()
     sender = LinkSender(wire.put, clock=lambda: wire.now)
     sender.offer("depth", depth_frame(rng, 0))
-    sender.acknowledged(LinkAck(1, wire.now, "station"))
+    sender.acknowledged(ack(1, at=wire.now))
     sender.offer("depth", depth_frame(rng, 1))
     sender.offer("depth", depth_frame(rng, 2))
     assert len(wire.sent) == 2

@@ -162,7 +162,7 @@ def examples(rng: np.random.Generator) -> list:
         PackedMap(3.2, 7, 6, (-2.5, 1.3), 0.02, 16, 16, -120, False, b_(rng), 41, 1.7e9),
         PackedDepth(0.5, 9, camera, _pose(rng), b_(rng), 42, 1.7e9),
         PackedColor(0.5, 9, b_(rng)),
-        LinkAck(42, 1.7e9, "a0f3"),
+        LinkAck(np.array([41, 42], np.int64), 1.7e9, "a0f3"),
         WholeMapRequest(1.7e9, "a0f3"),
         MapUpdate(
             3.0, 5, heights, heights > 0, None, None, None, heights, heights > 0, (0.0, 0.0), 0.02

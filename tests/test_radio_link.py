@@ -8,9 +8,12 @@ import time
 from collections import defaultdict
 
 import numpy as np
+import pytest
 import zenoh
 
 from footfall.messages import GaitStatus, MapUpdate, Mode, ModeCommand, WalkCommand
+from footfall.runtime.link_trial import cut_run, walking_run
+from footfall.runtime.radio import PROFILES, EmulatedLink, NamespaceError
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
 from test_link import assert_within_quantisation, random_map
 from test_robot_network import start_robot, wait_for
@@ -108,6 +111,48 @@ def test_a_station_joining_late_gets_a_whole_map_first_then_the_robots_map():
             robot.spin(0.1)
             assert robot.link_sender.flow_controlled
             assert robot.link_sender.counts.wholes >= 2  # the first, and the one asked for
-    assert len(got) >= 20
+    # Incompressible maps 20 times a second exceed the window: some give way to newer ones.
+    assert len(got) >= 10
     for update in got:
         assert_within_quantisation(update, sent[update.sequence])
+
+
+@pytest.fixture
+def poor_wifi():
+    """The robot's side of a "poor Wi-Fi" radio, or a skip saying why it cannot be made."""
+    link = EmulatedLink(PROFILES["poor-wifi"], seed=5)
+    try:
+        link.__enter__()
+    except NamespaceError as exc:
+        pytest.skip(f"the emulated radio needs a network namespace, which cannot be made: {exc}")
+    try:
+        yield link
+    finally:
+        link.__exit__(None, None, None)
+
+
+@pytest.mark.slow
+def test_over_poor_wifi_the_map_stays_fresh_and_commands_reach_the_joints(poor_wifi):
+    """Over 10 Mbit/s, 40 +- 10 ms and 2 % loss, with the map and images streaming: the
+    map arrives under 300 ms old (p95) at 5 Hz or more, and a station's command reaches
+    the joints in under 100 ms (p95)."""
+    result = walking_run(poor_wifi, 12.0)
+    assert result["messages_per_second"]["map"] >= 5.0, result
+    assert result["age_at_station_ms"]["map"]["p95"] < 300.0, result
+    assert result["command_to_joint_targets_ms"]["p95"] < 100.0, result
+
+
+@pytest.mark.slow
+def test_a_cut_radio_stands_the_robot_within_a_second_and_a_whole_map_follows_its_return(
+    poor_wifi,
+):
+    """The radio holds everything for 3 s: the robot stands still within a second of its
+    last command (by its own clock), and within 2 s of the link's return the station has a
+    whole map the robot made after it."""
+    result = cut_run(poor_wifi, 3.0, walk_s=6.0)
+    assert result["stopped_after_last_command_s"] <= 1.0, result
+    assert result["statuses_while_stopped"] > 10
+    assert result["feet_down_from_1_s_after_last_command"], result
+    assert result["body_moved_from_1_s_after_last_command_mm"] < 3.0, result
+    assert result["whole_map_after_return_s"] is not None
+    assert result["whole_map_after_return_s"] < 2.0, result

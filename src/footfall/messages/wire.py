@@ -36,7 +36,8 @@ class PackedMap(Message):
         has_spread: Whether the map keeps each cell's spread (the layer travels).
         cells: The zstd-compressed layers (see :mod:`footfall.runtime.wire`).
         link_sequence: Number of this message among everything the sender sent packed.
-        sent_at: When the sender handed it to the link (``time.time()``) [s].
+        offered_at: When the robot offered it to the link, before it waited its turn
+            (``time.time()``): its age at a receiver counts from here [s].
     """
 
     TOPIC = "map"
@@ -52,7 +53,7 @@ class PackedMap(Message):
     has_spread: bool
     cells: npt.NDArray[np.uint8]
     link_sequence: int = 0
-    sent_at: float = 0.0
+    offered_at: float = 0.0
 
     def __post_init__(self) -> None:
         if self.rows <= 0 or self.cols <= 0:
@@ -72,7 +73,8 @@ class PackedDepth(Message):
         camera_in_body: The optical frame in the body frame.
         depth_mm: The zstd-compressed little-endian ``uint16`` image, row-major.
         link_sequence: Number of this message among everything the sender sent packed.
-        sent_at: When the sender handed it to the link (``time.time()``) [s].
+        offered_at: When the robot offered it to the link, before it waited its turn
+            (``time.time()``): its age at a receiver counts from here [s].
     """
 
     TOPIC = "depth"
@@ -83,7 +85,7 @@ class PackedDepth(Message):
     camera_in_body: Pose
     depth_mm: npt.NDArray[np.uint8]
     link_sequence: int = 0
-    sent_at: float = 0.0
+    offered_at: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -95,7 +97,8 @@ class PackedColor(Message):
         sequence: Frame number.
         jpeg: The JPEG file's bytes.
         link_sequence: Number of this message among everything the sender sent packed.
-        sent_at: When the sender handed it to the link (``time.time()``) [s].
+        offered_at: When the robot offered it to the link, before it waited its turn
+            (``time.time()``): its age at a receiver counts from here [s].
     """
 
     TOPIC = "color"
@@ -104,22 +107,22 @@ class PackedColor(Message):
     sequence: int
     jpeg: npt.NDArray[np.uint8]
     link_sequence: int = 0
-    sent_at: float = 0.0
+    offered_at: float = 0.0
 
 
 @dataclass(frozen=True)
 class LinkAck(Message):
-    """A receiver's word that a packed message arrived.
+    """A receiver's word that packed messages arrived (sent a few times a second).
 
     Attributes:
-        link_sequence: The message's ``link_sequence``.
-        received_at: When it arrived (``time.time()``) [s].
-        receiver: Who received it (the receiving session's id).
+        link_sequences: The messages' ``link_sequence`` numbers.
+        received_at: When the last of them arrived (``time.time()``) [s].
+        receiver: Who received them (the receiving session's id).
     """
 
     TOPIC = "link/ack"
 
-    link_sequence: int
+    link_sequences: npt.NDArray[np.int64]
     received_at: float
     receiver: str = ""
 

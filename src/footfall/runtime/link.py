@@ -1,8 +1,10 @@
 """The radio link's two ends: what the robot sends when, and what the station makes of it.
 
 **Priorities.** Each topic has a zenoh priority (:data:`PRIORITIES`): commands, the mode and
-the link's own acknowledgements travel at ``REAL_TIME``, the robot's status, state, pose
-and log at ``INTERACTIVE_HIGH``, both ``express`` (sent at once, not batched). The map,
+the link's own acknowledgements travel at ``REAL_TIME`` (batched: a mode and a command sent
+together share a TCP segment, and on TCP every segment the station's side loses holds up
+what follows it), the robot's status, state, pose and log at ``INTERACTIVE_HIGH``,
+``express`` (sent at once). The map,
 depth and colour travel at ``DATA_LOW``. Zenoh keeps a queue per priority and empties the
 higher ones first, so a command never waits behind an image in the sender's queues. Every
 publisher uses congestion control ``DROP``: a control loop must never block on a slow link.
@@ -26,6 +28,8 @@ from collections import defaultdict, deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from footfall.messages import ColorImage, DepthFrame, MapUpdate, Message
 from footfall.messages.wire import LinkAck, PackedColor, PackedDepth, PackedMap, WholeMapRequest
 from footfall.runtime.wire import (
@@ -39,10 +43,10 @@ from footfall.runtime.wire import (
 
 # Topic -> (zenoh priority name, express). Topics not named travel at DATA.
 PRIORITIES: dict[str, tuple[str, bool]] = {
-    "command": ("REAL_TIME", True),
-    "mode": ("REAL_TIME", True),
-    LinkAck.TOPIC: ("REAL_TIME", True),
-    WholeMapRequest.TOPIC: ("REAL_TIME", True),
+    "command": ("REAL_TIME", False),
+    "mode": ("REAL_TIME", False),
+    LinkAck.TOPIC: ("REAL_TIME", False),
+    WholeMapRequest.TOPIC: ("REAL_TIME", False),
     "status": ("INTERACTIVE_HIGH", True),
     "servo": ("INTERACTIVE_HIGH", True),
     "state": ("INTERACTIVE_HIGH", True),
@@ -67,6 +71,8 @@ ACKING_RECENTLY_S = 10.0
 TARGET_DELAY_S = 0.1
 # The window never closes below this [bytes].
 MIN_WINDOW_BYTES = 32_000
+# A receiver acknowledges at most this often [s].
+ACK_EVERY_S = 0.1
 # A receiver asks for a whole map at most this often [s].
 WHOLE_REQUEST_EVERY_S = 0.5
 
@@ -113,7 +119,7 @@ class LinkSender:
         self.clock = clock
         self.maps = MapPacker(clock=clock)
         self.counts = LinkCounts()
-        self._waiting: dict[str, Message] = {}
+        self._waiting: dict[str, tuple[Message, float]] = {}  # topic -> (message, offered)
         self._in_flight: dict[int, tuple[float, int]] = {}  # link sequence -> (sent, bytes)
         self._acked: deque[tuple[float, int]] = deque()  # (when, bytes) in the last second
         self._round_trip_s = math.inf
@@ -124,7 +130,7 @@ class LinkSender:
         """Queue the newest message of a bulk topic and send what the link has room for."""
         if topic in self._waiting:
             self.counts.dropped[topic] += 1
-        self._waiting[topic] = message
+        self._waiting[topic] = (message, self.clock())
         self.flush()
 
     @property
@@ -151,15 +157,13 @@ class LinkSender:
     def flush(self) -> None:
         """Send waiting messages, most wanted first, while the window has room."""
         for topic in BULK:
-            message = self._waiting.get(topic)
-            if message is None:
+            if topic not in self._waiting:
                 continue
             if self.flow_controlled and self.in_flight_bytes() >= self.window_bytes():
                 return
-            del self._waiting[topic]
-            self._send(topic, message)
+            self._send(topic, *self._waiting.pop(topic))
 
-    def _send(self, topic: str, message: Message) -> None:
+    def _send(self, topic: str, message: Message, offered: float) -> None:
         self._sequence += 1
         now = self.clock()
         if isinstance(message, MapUpdate):
@@ -169,24 +173,25 @@ class LinkSender:
             packed = pack_depth(message)
         else:
             packed = pack_color(message)
-        data = _with_link_fields(packed, self._sequence, now).encode()
+        data = _with_link_fields(packed, self._sequence, offered).encode()
         self._in_flight[self._sequence] = (now, len(data))
         self.counts.sent[topic] += 1
         self.counts.sent_bytes[topic] += len(data)
         self.put(topic, data)
 
     def acknowledged(self, ack: LinkAck) -> None:
-        """A receiver got a message: it leaves the flight, its bytes count as delivered."""
+        """A receiver got messages: they leave the flight, their bytes count as delivered."""
         now = self.clock()
         self._last_ack = now
-        sent = self._in_flight.pop(ack.link_sequence, None)
-        if sent is None:
-            return
-        self.counts.acknowledged += 1
-        self._acked.append((now, sent[1]))
-        round_trip = now - sent[0]
-        # The smallest recent round trip: the link's own, without its queues.
-        self._round_trip_s = min(round_trip, 0.9 * self._round_trip_s + 0.1 * round_trip)
+        for sequence in ack.link_sequences.tolist():
+            sent = self._in_flight.pop(sequence, None)
+            if sent is None:
+                continue
+            self.counts.acknowledged += 1
+            self._acked.append((now, sent[1]))
+            round_trip = now - sent[0]
+            # The smallest recent round trip: the link's own, without its queues.
+            self._round_trip_s = min(round_trip, 0.9 * self._round_trip_s + 0.1 * round_trip)
         self.flush()
 
     def whole_map_wanted(self, request: WholeMapRequest) -> None:
@@ -194,8 +199,8 @@ class LinkSender:
         self.maps.want_whole = True
 
 
-def _with_link_fields(packed, sequence: int, now: float):
-    return dataclasses.replace(packed, link_sequence=sequence, sent_at=now)
+def _with_link_fields(packed, sequence: int, offered: float):
+    return dataclasses.replace(packed, link_sequence=sequence, offered_at=offered)
 
 
 class LinkReceiver:
@@ -208,8 +213,10 @@ class LinkReceiver:
 
     Attributes:
         waiting_for_whole: Map changes received while no whole map was at hand.
-        latency_s: Per bulk topic, how long each message took from sender to here [s]
-            (meaningful when both ends share a clock).
+        latency_s: Per bulk topic, each message's age on arrival: from when the robot
+            offered it to the link [s] (meaningful when both ends share a clock).
+        offered_at: Per bulk topic, when the robot offered the last message that arrived
+            (``time.time()``) [s].
     """
 
     def __init__(self, reply: Callable[[str, Message], None], receiver: str, clock=time.time):
@@ -219,7 +226,24 @@ class LinkReceiver:
         self.maps = MapUnpacker()
         self.waiting_for_whole = 0
         self.latency_s: dict[str, deque[float]] = defaultdict(lambda: deque(maxlen=1000))
+        self.offered_at: dict[str, float] = {}
         self._asked = -math.inf
+        self._unacknowledged: list[int] = []
+        self._received_at = 0.0
+        self._acked_at = -math.inf
+
+    def acknowledge(self) -> None:
+        """Acknowledge what arrived, if there is any, at most every ``ACK_EVERY_S``.
+
+        Few acknowledgements keep the station's side of the link quiet: on TCP every
+        segment lost there holds up the commands behind it.
+        """
+        now = self.clock()
+        if self._unacknowledged and now - self._acked_at >= ACK_EVERY_S:
+            sequences = np.asarray(self._unacknowledged, np.int64)
+            self.reply(LinkAck.TOPIC, LinkAck(sequences, self._received_at, self.receiver))
+            self._unacknowledged.clear()
+            self._acked_at = now
 
     def unpack(self, topic: str, message: Message) -> Message | None:
         """What a packed message stands for; any other message as it is.
@@ -229,8 +253,10 @@ class LinkReceiver:
         if not isinstance(message, (PackedMap, PackedDepth, PackedColor)):
             return message
         now = self.clock()
-        self.reply(LinkAck.TOPIC, LinkAck(message.link_sequence, now, self.receiver))
-        self.latency_s[topic].append(now - message.sent_at)
+        self._unacknowledged.append(message.link_sequence)
+        self._received_at = now
+        self.latency_s[topic].append(now - message.offered_at)
+        self.offered_at[topic] = message.offered_at
         if isinstance(message, PackedDepth):
             return unpack_depth(message)
         if isinstance(message, PackedColor):

@@ -251,6 +251,7 @@ class ZenohBus:
                 item = self._inbox.get_nowait()
             except queue.Empty:
                 item = None
+        self.link_receiver.acknowledge()
         if self.link_sender is not None:
             self.link_sender.flush()
         return handled

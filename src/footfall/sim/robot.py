@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from footfall.messages import Mode, ModeCommand, Posture, WalkCommand
+from footfall.messages import JointTargets, Mode, ModeCommand, Posture, WalkCommand
 from footfall.nodes.movement import COMMAND_TIMEOUT_S
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bridge import Bridge
@@ -152,26 +152,33 @@ def run_robot(
 class CommandLatency:
     """How long a station's commands take to reach the joints.
 
-    A command stamped with the station's wall clock counts from that stamp to the end of
-    the tick that delivered it, when the joint targets computed with it have gone to the
-    backend (the two clocks agree on one machine, or with NTP across two).
+    A command stamped with the station's wall clock counts from that stamp to the first
+    joint targets of the tick that delivered it, the first computed with it (a limp robot
+    sends none: its commands are not counted). The two clocks agree on one machine, or
+    with NTP across two.
     """
 
     def __init__(self, local: InProcessBus) -> None:
         self._arrived: list[float] = []
+        self._targets_at: float | None = None
         self.latencies_s: list[float] = []
         local.subscribe(WalkCommand.TOPIC, self._arrive)
+        local.subscribe(JointTargets.TOPIC, self._targets)
 
     def _arrive(self, command: WalkCommand) -> None:
         if command.stamp > WALL_CLOCK_EPOCH_S:  # a wall-clock stamp, not simulated time
             self._arrived.append(command.stamp)
 
+    def _targets(self, _targets: JointTargets) -> None:
+        if self._arrived and self._targets_at is None:
+            self._targets_at = time.time()
+
     def acted_on(self) -> None:
-        """The tick's joint targets went out: the commands it delivered were acted on."""
-        if self._arrived:
-            now = time.time()
-            self.latencies_s += [now - stamp for stamp in self._arrived]
-            self._arrived.clear()
+        """The tick ended: its commands reached the joints, or none went out (limp)."""
+        if self._targets_at is not None:
+            self.latencies_s += [self._targets_at - stamp for stamp in self._arrived]
+        self._arrived.clear()
+        self._targets_at = None
 
     def summary(self) -> dict[str, float] | None:
         """Median, 95th percentile and largest latency [ms], and how many commands."""

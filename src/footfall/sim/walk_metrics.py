@@ -183,8 +183,8 @@ class BridgeTraffic:
             messages sent, their bytes, those dropped for a newer one; whole maps sent;
             messages acknowledged. None on a full-precision link.
         command_latency_ms: From a station's command (its wall-clock stamp) to the first
-            joint targets computed with it: ``median``, ``p95``, ``max`` [ms] and ``count``;
-            None when no command came.
+            joint targets computed with it: ``median``, ``p95``, ``max`` [ms] and ``count``
+            (commands to a limp robot not counted); None when no command came.
     """
 
     bridge_forwarded: dict[str, int]
