@@ -141,6 +141,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--seconds", type=float, default=600.0, help="longest run in seconds")
     p.add_argument("--stop-at-goal", action="store_true", help="end the run at the goal")
     p.add_argument(
+        "--foxglove",
+        type=int,
+        metavar="PORT",
+        help="serve the robot live to Foxglove over its WebSocket protocol on this port "
+        "(on 127.0.0.1; with --listen-remote on every address): open a Foxglove WebSocket "
+        "connection to ws://127.0.0.1:PORT (needs footfall[foxglove])",
+    )
+    p.add_argument(
         "--full-precision",
         action="store_true",
         help="send the map, depth and colour as the robot holds them (a wired network) "
@@ -188,6 +196,15 @@ def _ready(console: Console, args: argparse.Namespace, what: str):
         )
 
     return ready
+
+
+def _foxglove(args: argparse.Namespace) -> tuple[str, int] | None:
+    """Where --foxglove serves: loopback unless --listen-remote."""
+    if args.foxglove is None:
+        return None
+    if not 0 < args.foxglove < 65536:
+        raise ConfigError(f"--foxglove {args.foxglove}: a port is 1 to 65535")
+    return ("0.0.0.0" if args.listen_remote else "127.0.0.1", args.foxglove)
 
 
 def _robot_network(args: argparse.Namespace):
@@ -280,7 +297,11 @@ def run(args: argparse.Namespace, console: Console) -> int:
         seconds=args.seconds,
         stop_at_goal=args.stop_at_goal,
         rates=_rates(args.rate),
+        foxglove=_foxglove(args),
     )
+    if request.foxglove is not None:
+        host, port = request.foxglove
+        console.print(f"Foxglove: open a WebSocket connection to ws://{host}:{port}")
     world = f"servos of {args.hardware}" if args.hardware else f"on {args.sim}"
     where = f"{backend} hexapod {world}; torque off until mode=walking"
     ready = _ready(console, args, where)

@@ -27,6 +27,8 @@ class RobotRequest:
         stop_at_goal: End at the terrain's goal.
         rates: Largest rates [Hz] of the topics sent out, overriding the defaults (None:
             every message).
+        foxglove: ``(host, port)`` to serve the robot's own bus on over Foxglove's
+            WebSocket protocol, or None.
     """
 
     walk: WalkRequest = field(default_factory=WalkRequest)
@@ -34,6 +36,7 @@ class RobotRequest:
     seconds: float = 600.0
     stop_at_goal: bool = False
     rates: dict[str, float | None] = field(default_factory=dict)
+    foxglove: tuple[str, int] | None = None
 
 
 def run_robot_report(
@@ -59,18 +62,31 @@ def run_robot_report(
             outgoing={**OUTGOING, **request.rates},
         )
         w = request.walk
-        with Recorders(w.record, w.rerun, w.rerun_spawn) as recorders:
-            result, _ = run_robot(
-                job.spec,
-                settings,
-                network,
-                on_tick=on_tick,
-                should_stop=stop,
-                local=recorders.attach(InProcessBus()),
-                on_build=lambda robot: (
-                    recorders.mapping_started(robot.mapping) if robot.mapping is not None else None
-                ),
-            )
+        local = InProcessBus()
+        live = None
+        if request.foxglove is not None:
+            from footfall.recording.foxglove_live import FoxgloveLive
+
+            live = FoxgloveLive(request.foxglove[1], host=request.foxglove[0])
+            local.tap(live.tap)
+        try:
+            with Recorders(w.record, w.rerun, w.rerun_spawn) as recorders:
+                result, _ = run_robot(
+                    job.spec,
+                    settings,
+                    network,
+                    on_tick=on_tick,
+                    should_stop=stop,
+                    local=recorders.attach(local),
+                    on_build=lambda robot: (
+                        recorders.mapping_started(robot.mapping)
+                        if robot.mapping is not None
+                        else None
+                    ),
+                )
+        finally:
+            if live is not None:
+                live.close()
     return WalkReport(job, result)
 
 
