@@ -14,7 +14,6 @@ from footfall.runtime.radio import PROFILES, EmulatedLink, NamespaceError
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
 from footfall.sim.robot import CommandLatency
 from test_link import assert_within_quantisation, random_map
-from test_robot_network import wait_for
 from test_zenoh_bus import free_port
 
 
@@ -68,7 +67,11 @@ def test_a_station_joining_late_gets_a_whole_map_first_then_the_robots_map():
                 robot.publish("map", update)
                 robot.spin(0.02)
                 station.spin(0.05)
-            assert wait_for(station, lambda: got and got[-1].sequence == 29, 5.0)
+            end = time.monotonic() + 5.0  # both ends spin: the robot hears the acknowledgements
+            while not (got and got[-1].sequence == 29) and time.monotonic() < end:
+                robot.spin(0.01)
+                station.spin(0.01)
+            assert got and got[-1].sequence == 29
             robot.spin(0.1)
             assert robot.link_sender.flow_controlled
             assert robot.link_sender.counts.wholes >= 2  # the first, and the one asked for
@@ -113,13 +116,14 @@ def test_over_poor_wifi_the_map_stays_fresh_and_commands_reach_the_joints(poor_w
 def test_a_cut_radio_stands_the_robot_within_a_second_and_a_whole_map_follows_its_return(
     poor_wifi,
 ):
-    """The radio holds everything for 3 s: the robot stands still within a second of its
-    last command (by its own clock), and within 2 s of the link's return the station has a
-    whole map the robot made after it."""
+    """The radio holds everything for 3 s: the robot's body stands still within a second of
+    its last command (by its own clock), the feet in the air land within 1.5 s, and within
+    2 s of the link's return the station has a whole map the robot made after it."""
     result = cut_run(poor_wifi, 3.0, walk_s=6.0)
     assert result["stopped_after_last_command_s"] <= 1.0, result
     assert result["statuses_while_stopped"] > 10
-    assert result["feet_down_from_1_s_after_last_command"], result
+    assert result["feet_down_after_last_command_s"] is not None
+    assert result["feet_down_after_last_command_s"] < 1.5, result
     assert result["body_moved_from_1_s_after_last_command_mm"] < 3.0, result
     assert result["whole_map_after_return_s"] is not None
     assert result["whole_map_after_return_s"] < 2.0, result

@@ -13,7 +13,8 @@ publisher uses congestion control ``DROP``: a control loop must never block on a
 topic and a newer one replaces it (the replaced one is counted as dropped: newest kept).
 While a receiver acknowledges what it gets (a footfall bus does, :class:`LinkAck`), the
 sender keeps the bytes in flight (sent, not yet acknowledged) within a window of what the
-link delivered in the last second times the round trip plus ``TARGET_DELAY_S``: a slow
+link delivered in the last second times the round trip, the acknowledgements' interval
+and ``TARGET_DELAY_S``: a slow
 link gets fewer images rather than older ones, and the queues in front of the commands
 (zenoh's, the kernel's, the radio's) stay short. Without acknowledgements (a plain
 subscriber) every message goes at once. The map goes first, then depth, then colour.
@@ -144,7 +145,8 @@ class LinkSender:
         while self._acked and now - self._acked[0][0] > 1.0:
             self._acked.popleft()
         rate = sum(n for _, n in self._acked)  # bytes per second delivered
-        delay = TARGET_DELAY_S + (self._round_trip_s if math.isfinite(self._round_trip_s) else 0)
+        round_trip = self._round_trip_s if math.isfinite(self._round_trip_s) else 0.0
+        delay = TARGET_DELAY_S + ACK_EVERY_S + round_trip  # acknowledgements come in batches
         return max(MIN_WINDOW_BYTES, rate * delay)
 
     def in_flight_bytes(self) -> int:

@@ -11,9 +11,10 @@ stamped with the wall clock.
   percentile; from a command to the first joint targets computed with it (the robot's
   ``command_latency_ms``); what the robot dropped for newer messages.
 - :func:`cut_run`: after some walking the radio holds everything for a while. From the
-  robot's own statuses (held, then delivered): how long after the last command
-  before the cut the robot stood still; and how long after the link returned the station
-  had a whole current map (one the robot offered after the return).
+  robot's own statuses (held, then delivered): how long after the last command before the
+  cut the watchdog stopped it, whether its body was still from a second after, when every
+  foot was down; and how long after the link returned the station had a whole current map
+  (one the robot offered after the return).
 
 ``benchmarks/bench_link.py`` runs both over each profile; ``tests/test_radio_link.py``
 checks them against what a station needs.
@@ -185,12 +186,17 @@ def cut_run(link: EmulatedLink, cut_s: float, walk_s: float = 8.0) -> dict:
     during = [s for s in stopped if s.stamp >= last_command + 1.0]
     poses = [(s.body_pose.x, s.body_pose.y) for s in during]
     moved = np.ptp(poses, axis=0) if poses else [np.nan]
-    standing = [s.state is GaitState.REST for s in during]
+    # Feet down from the first status after which every one says rest (the feet in the air
+    # when the watchdog stopped the body land where they were going).
+    resting = [s.state is GaitState.REST for s in stopped]
+    down = next((k for k in range(len(stopped)) if all(resting[k:])), None)
     return {
         "cut_seconds": cut_s,
         "stopped_after_last_command_s": round(first.stamp - last_command, 3),
         "body_moved_from_1_s_after_last_command_mm": round(1e3 * float(np.hypot(*moved)), 2),
-        "feet_down_from_1_s_after_last_command": bool(standing) and all(standing),
+        "feet_down_after_last_command_s": (
+            round(stopped[down].stamp - last_command, 3) if down is not None else None
+        ),
         "statuses_while_stopped": len(during),
         "whole_map_after_return_s": round(current[0] - restored, 3) if current else None,
     }
