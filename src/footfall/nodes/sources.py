@@ -39,6 +39,8 @@ class SourceSetup:
         backend: The robot (a simulator renders through it; a driver may read its clock).
         mount: The camera's settings (a simulator's :class:`~footfall.sim.model.CameraMount`).
         color: Publish colour images too (for a station).
+        color_hz: At most this many colour images a second (a simulator renders no more
+            than are sent); None: one with every depth image.
         camera: The camera source whose images a pose source answers; None for a camera.
         options: Source-specific settings (a device's serial number, a SLAM's config).
     """
@@ -48,6 +50,7 @@ class SourceSetup:
     mount: object = None
     color: bool = False
     camera: CameraSource | None = None
+    color_hz: float | None = None
     options: dict[str, str] = field(default_factory=dict)
 
 

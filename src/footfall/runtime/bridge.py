@@ -16,6 +16,9 @@ from footfall.errors import ConfigError
 from footfall.messages.codec import Message
 from footfall.runtime.bus import Bus, InProcessBus
 
+# A message this share of a period early still goes in its slot.
+EARLY_SHARE = 0.1
+
 
 class Bridge:
     """Forward topics between a local bus and a remote one.
@@ -57,11 +60,12 @@ class Bridge:
         def send(message: Message) -> None:
             if rate is not None:
                 now, slot, period = self.clock(), self._next[topic], 1.0 / rate
-                if now < slot:
+                if now < slot - EARLY_SHARE * period:
                     return
                 # The next slot follows this one's, not this message's arrival, so messages
                 # that come more often than the rate go at the rate on average (the first
-                # after a pause starts the slots afresh).
+                # after a pause starts the slots afresh); one that comes at the rate, a
+                # little early by the wall clock, still takes its slot.
                 self._next[topic] = (now if now - slot > period else slot) + period
             self.remote.publish(topic, message)
             self.forwarded[topic] += 1

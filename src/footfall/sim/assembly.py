@@ -106,6 +106,7 @@ class WalkingRobot:
         command_timeout: float | None = None,
         color: bool = False,
         log_ticks: int | None = None,
+        color_hz: float | None = None,
         meter: CpuMeter | None = None,
     ) -> WalkingRobot:
         """Put the robot on the terrain, let it settle, and start its nodes on ``bus``.
@@ -114,7 +115,8 @@ class WalkingRobot:
         and mapping nodes too, with the ground under the standing robot as a prior and a
         first frame. The camera and the pose source publish through a faulty link when the
         settings ask for faults. With ``color`` the camera also renders colour images (for
-        a station). Each node's work is charged to it on ``meter`` (a new one when None).
+        a station), at most ``color_hz`` a second when given. Each node's work is charged
+        to it on ``meter`` (a new one when None).
         """
         meter = meter if meter is not None else CpuMeter()
         camera_mount = None if settings.blind else settings.camera
@@ -150,6 +152,7 @@ class WalkingRobot:
                     settings.camera,
                     color,
                     options=dict(settings.camera_options),
+                    color_hz=color_hz,
                 )
             )
             POSES.get(settings.pose_source).open(

@@ -100,7 +100,13 @@ def run_robot(
     terrain = make_terrain(walk.terrain, seed=walk.seed)
     local = local if local is not None else InProcessBus()
     robot = WalkingRobot.build(
-        spec, walk, terrain, local, command_timeout=settings.command_timeout, color=True
+        spec,
+        walk,
+        terrain,
+        local,
+        command_timeout=settings.command_timeout,
+        color=True,
+        color_hz=settings.outgoing.get("color"),  # rendered no more often than sent
     )
     if on_build is not None:
         on_build(robot)

@@ -38,13 +38,19 @@ class SimCameraNode:
         bus: The bus.
         backend: The simulated robot (built with the camera mount).
         mount: The camera mount.
-        color: Also render and publish a colour image of each frame (for a station).
+        color: Also render and publish colour images (for a station).
+        color_hz: At most this many colour images a second; None: one with every frame.
     """
 
     name = "camera"
 
     def __init__(
-        self, bus: Bus, backend: MujocoHexapod, mount: CameraMount, color: bool = False
+        self,
+        bus: Bus,
+        backend: MujocoHexapod,
+        mount: CameraMount,
+        color: bool = False,
+        color_hz: float | None = None,
     ) -> None:
         self.bus = bus
         self.backend = backend
@@ -54,6 +60,8 @@ class SimCameraNode:
             true_body_pose(backend).inverse().compose(self.camera.pose(backend.data))
         )
         self.color = color
+        self.color_period = 0.0 if color_hz is None else 1.0 / color_hz
+        self._next_color = 0.0
         self.render_ms: deque[float] = deque(maxlen=TIMING_HISTORY)
         self.frames = 0
         self._next_frame = 0.0
@@ -69,7 +77,7 @@ class SimCameraNode:
             )
         if not isinstance(setup.mount, CameraMount):
             raise ConfigError("the simulated camera needs a CameraMount")
-        return cls(setup.bus, simulator, setup.mount, color=setup.color)
+        return cls(setup.bus, simulator, setup.mount, color=setup.color, color_hz=setup.color_hz)
 
     def tick(self, t: float) -> bool:
         """Take and publish a frame if one is due at time ``t`` [s]; True when it did."""
@@ -85,7 +93,9 @@ class SimCameraNode:
             t, depth, self.camera.intrinsics, self.camera_in_body, sequence=self.frames
         )
         self.bus.publish(DepthFrame.TOPIC, frame)
-        if self.color:
+        if self.color and t + 1e-9 >= self._next_color:
+            # Rendered only as often as it is wanted: a render is the camera's main cost.
+            self._next_color = max(self._next_color + self.color_period, t)
             image = self.camera.capture_color(self.backend.data)
             self.bus.publish(ColorImage.TOPIC, ColorImage(t, image, frame.sequence))
         return True
