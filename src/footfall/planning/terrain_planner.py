@@ -181,8 +181,8 @@ class TerrainPlanner:
         """Highest mapped height within a foot radius of each point [m]; -inf if unknown."""
         p = np.atleast_2d(np.asarray(xy, dtype=np.float64))
         r = self.spec.foot_radius
-        rings = [(0.0, 0.0), (r, 0.0), (-r, 0.0), (0.0, r), (0.0, -r)]
-        heights = np.stack([self.ground_height(p + d) for d in rings])
+        rings = np.array([(0.0, 0.0), (r, 0.0), (-r, 0.0), (0.0, r), (0.0, -r)])
+        heights = self.ground_height(p[None] + rings.reshape((5,) + (1,) * (p.ndim - 1) + (2,)))
         return np.where(np.isnan(heights), -np.inf, heights).max(axis=0)
 
     # Footholds ----------------------------------------------------------------------------
