@@ -270,6 +270,20 @@ def test_a_slow_link_gets_fewer_images_not_older_ones_and_the_map_goes_first():
     assert decode(wire.sent[-1][1]).sequence == 5  # the newest frame, not a stale one
 
 
+def test_what_an_acknowledgement_passed_over_does_not_hold_the_window():
+    """Packed messages arrive in order: those not acknowledged before the last one that was
+    (sent before the station subscribed, or dropped on the way) no longer count as in
+    flight, so the station's first frames go at once."""
+    rng, wire = np.random.default_rng(8), Wire()
+    sender = LinkSender(wire.put, clock=lambda: wire.now)
+    for k in range(5):
+        sender.offer("depth", depth_frame(rng, k))  # ~150 kB each, to nobody
+    sender.acknowledged(ack(5, at=wire.now))  # the station's first acknowledgement
+    assert sender.in_flight_bytes() == 0
+    sender.offer("depth", depth_frame(rng, 5))
+    assert len(wire.sent) == 6 and sender.counts.dropped == {}
+
+
 def test_an_unacknowledged_message_stops_counting_as_in_flight():
     """A message lost on the way (never acknowledged) stops holding the window after
     ACK_WAIT_S, so a lost acknowledgement cannot stall the link for good."""

@@ -97,10 +97,10 @@ def poor_wifi():
 
 @pytest.mark.slow
 @pytest.mark.xfail(
-    strict=True,
-    reason="commands reach the joints in 75 ms (median) but 180-200 ms (p95) over poor Wi-Fi: "
-    "the simulated robot's own ticks (its camera and mapping share the control thread) and "
-    "TCP's retransmission stalls on the station's side; the map's age is within its bound",
+    strict=False,
+    reason="commands reach the joints in 55-65 ms (median) and 97-124 ms (p95) over poor "
+    "Wi-Fi, across runs: the simulated robot's camera and mapping share its control thread, "
+    "and TCP stalls on each loss; under 100 ms in some runs, not in all",
 )
 def test_over_poor_wifi_the_map_stays_fresh_and_commands_reach_the_joints(poor_wifi):
     """Over 10 Mbit/s, 40 +- 10 ms and 2 % loss, with the map and images streaming: the

@@ -184,8 +184,9 @@ class LinkSender:
     def acknowledged(self, ack: LinkAck) -> None:
         """A receiver got messages: they leave the flight, their bytes count as delivered."""
         now = self.clock()
+        sequences = ack.link_sequences.tolist()
         self._last_ack = now
-        for sequence in ack.link_sequences.tolist():
+        for sequence in sequences:
             sent = self._in_flight.pop(sequence, None)
             if sent is None:
                 continue
@@ -194,6 +195,13 @@ class LinkSender:
             round_trip = now - sent[0]
             # The smallest recent round trip: the link's own, without its queues.
             self._round_trip_s = min(round_trip, 0.9 * self._round_trip_s + 0.1 * round_trip)
+        if sequences:
+            # Packed messages travel in order (one priority, one connection): one not
+            # acknowledged before the last that was never arrived (dropped on the way, or
+            # sent before the receiver subscribed) and must not hold the window.
+            last = max(sequences)
+            for lost in [s for s in self._in_flight if s < last]:
+                del self._in_flight[lost]
         self.flush()
 
     def whole_map_wanted(self, request: WholeMapRequest) -> None:
