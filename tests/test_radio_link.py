@@ -96,17 +96,12 @@ def poor_wifi():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=False,
-    reason="commands reach the joints in 55-65 ms (median) and 97-124 ms (p95) over poor "
-    "Wi-Fi, across runs: the simulated robot's camera and mapping share its control thread, "
-    "and TCP stalls on each loss; under 100 ms in some runs, not in all",
-)
 def test_over_poor_wifi_the_map_stays_fresh_and_commands_reach_the_joints(poor_wifi):
     """Over 10 Mbit/s, 40 +- 10 ms and 2 % loss, with the map and images streaming: the
     map arrives under 300 ms old (p95) at 5 Hz or more, and a station's command reaches
-    the joints in under 100 ms (p95)."""
-    result = walking_run(poor_wifi, 12.0)
+    the joints in under 100 ms (p95). Long enough for a hundred commands: each one lost on
+    the air (2 %) waits a retransmission, 160 ms."""
+    result = walking_run(poor_wifi, 25.0)
     assert result["messages_per_second"]["map"] >= 5.0, result
     assert result["age_at_station_ms"]["map"]["p95"] < 300.0, result
     assert result["command_to_joint_targets_ms"]["p95"] < 100.0, result

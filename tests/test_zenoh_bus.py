@@ -221,3 +221,33 @@ def test_tls_from_a_configuration_file(tmp_path):
             server.spin(0.2)
         assert got and got[0].speed == 0.1
         assert server.listening_locators() == [endpoint]
+
+
+def test_a_station_may_send_its_commands_on_a_connection_of_their_own():
+    """With ``command_session`` the station joins the robot twice: its commands and mode
+    arrive over the second session (a TCP connection of its own), the rest over the first.
+    It needs endpoints to connect to."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with ZenohBus(ZenohConfig(listen=(endpoint,))) as robot:
+        station = ZenohBus(ZenohConfig(connect=(endpoint,), command_session=True))
+        try:
+            assert station.command_session is not None
+            commands, logs = [], []
+            robot.subscribe("command", commands.append)
+            robot.subscribe("mode", commands.append)
+            robot.subscribe("log", logs.append)
+            spin_until(robot, lambda: len(robot.session.info.peers_zid()) == 2)
+            peers = {str(z) for z in robot.session.info.peers_zid()}
+            assert peers == {str(station.session.zid()), str(station.command_session.zid())}
+            end = time.monotonic() + 5.0
+            while len(commands) < 2 or not logs:
+                assert time.monotonic() < end, "nothing arrived"
+                station.publish("command", WalkCommand(speed=0.2))
+                station.publish("mode", ModeCommand())
+                station.publish("log", LogLine(0.0, "station", "info", "hello"))
+                robot.spin(0.1)
+            assert station.stats["command"].messages >= 1
+        finally:
+            station.close()
+    with pytest.raises(ConfigError, match="connect"):
+        ZenohConfig(listen=(endpoint,), command_session=True)

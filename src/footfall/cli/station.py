@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 
 from rich.console import Console
 
@@ -62,7 +63,10 @@ def run(args: argparse.Namespace, console: Console) -> int:
 
     # Ctrl-C or SIGTERM ends the run between two updates: an interrupt raised in the middle
     # of one could leave the page server or the session half-way and the process hanging.
-    with stop_on_signals() as stopped, ZenohBus(network_config(args)) as bus:
+    config = network_config(args)
+    # Commands go on a connection of their own, never behind the station's other traffic.
+    config = dataclasses.replace(config, command_session=bool(config.connect))
+    with stop_on_signals() as stopped, ZenohBus(config) as bus:
         spec = None if args.biped else load_spec(args.robot)
         station = Station(bus, host=args.host, port=args.port, biped=args.biped, spec=spec)
         if args.goal is not None:

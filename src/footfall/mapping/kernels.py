@@ -2,7 +2,8 @@
 
 One pass over the pixels back-projects, transforms, bins and keeps the highest point per
 cell of the frame; a second pass over the touched cells fuses the frame into the map. The
-plain-NumPy equivalent is :mod:`footfall.mapping.reference`.
+plain-NumPy equivalent is :mod:`footfall.mapping.reference`. They release the GIL: a
+robot's mapping thread fuses while its control loop runs.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ SUB = 4
 FUSE_LATEST, FUSE_MAX, FUSE_VARIANCE = 0, 1, 2
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _bin_point(
     wx,
     wy,
@@ -88,7 +89,7 @@ def _bin_point(
     return n_touched
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _part_bit(u, v):
     """The bit of the cell part holding a point at fractions ``u``, ``v`` of the cell."""
     a = min(max(np.int64(u * SUB), 0), SUB - 1)
@@ -96,7 +97,7 @@ def _part_bit(u, v):
     return np.uint16(1) << np.uint16(SUB * a + b)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def bin_depth(
     depth,
     scale,
@@ -208,7 +209,7 @@ def bin_depth(
     return n_touched
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def bin_points(
     points,
     sensor,
@@ -261,7 +262,7 @@ def bin_points(
     return n_touched
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def fuse(
     touched,
     n_touched,

@@ -28,6 +28,7 @@ from footfall.registry import Registry
 if TYPE_CHECKING:  # the robot's parser lists the sources without loading the bus
     from footfall.backends import HexapodBackend
     from footfall.runtime.bus import Bus
+    from footfall.runtime.node_thread import NodeThread
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,11 @@ class SourceSetup:
             than are sent); None: one with every depth image.
         camera: The camera source whose images a pose source answers; None for a camera.
         options: Source-specific settings (a device's serial number, a SLAM's config).
+        thread: The robot's perception thread, where a camera may do its heavy work (a
+            simulator's render) rather than in ``tick``; it then publishes on
+            ``thread_bus`` from there, and the pose source answers it there. None: no
+            such thread (a simulated walk, repeatable to the bit).
+        thread_bus: That thread's bus.
     """
 
     bus: Bus
@@ -52,6 +58,8 @@ class SourceSetup:
     camera: CameraSource | None = None
     color_hz: float | None = None
     options: dict[str, str] = field(default_factory=dict)
+    thread: NodeThread | None = None
+    thread_bus: Bus | None = None
 
 
 class CameraSource(Protocol):
@@ -59,6 +67,9 @@ class CameraSource(Protocol):
 
     Attributes:
         name: The node's name in logs.
+
+    A camera that took the setup's thread says so with a ``thread`` attribute (its pose
+    source is then opened on that thread's bus); others publish from ``tick``.
     """
 
     name: str

@@ -60,6 +60,9 @@ PRIORITIES: dict[str, tuple[str, bool]] = {
     "depth": ("DATA_LOW", False),
     "color": ("DATA_LOW", False),
 }
+# What a station commands: on a radio it goes on a connection of its own (``ZenohConfig.
+# command_session``), never behind a lost segment of the station's acknowledgements.
+COMMAND_TOPICS = ("command", "mode")
 # Bulk topics, most wanted first, with the message each packs.
 BULK: dict[str, type[Message]] = {"map": MapUpdate, "depth": DepthFrame, "color": ColorImage}
 # A message unacknowledged this long no longer counts as in flight (lost) [s].

@@ -79,7 +79,7 @@ class Station:
     """The station's end: every topic heard, commands sent on a heartbeat."""
 
     def __init__(self, endpoint: str) -> None:
-        self.bus = ZenohBus(ZenohConfig(connect=(endpoint,)))
+        self.bus = ZenohBus(ZenohConfig(connect=(endpoint,), command_session=True))
         self.statuses: list[GaitStatus] = []
         self.maps: list[tuple[float, float]] = []  # (arrival, offered) [s, wall clock]
         self.bus.subscribe(GaitStatus.TOPIC, self.statuses.append)
@@ -135,9 +135,16 @@ def walking_run(link: EmulatedLink, seconds: float) -> dict:
                 stats.messages = stats.bytes = 0
             for ages in station.bus.link_receiver.latency_s.values():
                 ages.clear()
+            proxy = link.proxy
+            assert proxy is not None
+            before = {w: (c.segments, c.lost) for w, c in (("up", proxy.up), ("down", proxy.down))}
             start = time.monotonic()
             station.walk(seconds)
             elapsed = time.monotonic() - start
+            segments = {
+                w: (c.segments - before[w][0], c.lost - before[w][1])
+                for w, c in (("up", proxy.up), ("down", proxy.down))
+            }
             received = {t: (s.bytes, s.messages) for t, s in sorted(station.bus.received.items())}
             ages = {t: percentiles(a) for t, a in station.bus.link_receiver.latency_s.items()}
         finally:
@@ -151,6 +158,9 @@ def walking_run(link: EmulatedLink, seconds: float) -> dict:
         "age_at_station_ms": ages,
         "command_to_joint_targets_ms": metrics.get("command_latency_ms"),
         "robot_link": metrics.get("link"),
+        # Station to robot (up) and back (down): segments a second, and how many were lost.
+        "segments_per_second": {w: round(n / elapsed, 1) for w, (n, _) in segments.items()},
+        "segments_lost": {w: lost for w, (_, lost) in segments.items()},
     }
 
 

@@ -12,7 +12,8 @@ dropped, counted in :attr:`ZenohBus.malformed` or :attr:`ZenohBus.failed` and lo
 With ``radio``, the map, depth and colour go packed for a radio link, within what the
 link delivers (:mod:`footfall.runtime.link`); every bus unpacks and acknowledges what
 arrives packed, so a subscriber sees the usual messages. Each topic's publisher has the
-priority of :data:`~footfall.runtime.link.PRIORITIES`.
+priority of :data:`~footfall.runtime.link.PRIORITIES`. A station's bus may send its
+commands on a session of their own (``command_session``).
 
 Safe defaults: only the endpoints asked for, loopback unless ``allow_remote`` says
 otherwise, and no multicast scouting unless asked for. TLS and user/password
@@ -37,7 +38,7 @@ from footfall.messages import LogLine
 from footfall.messages.codec import Message, decode
 from footfall.messages.wire import LinkAck, WholeMapRequest
 from footfall.runtime.bus import Callback, Handler, ServiceError, TopicStats
-from footfall.runtime.link import BULK, PRIORITIES, LinkReceiver, LinkSender
+from footfall.runtime.link import BULK, COMMAND_TOPICS, PRIORITIES, LinkReceiver, LinkSender
 
 KEY_PREFIX = "footfall"
 
@@ -81,6 +82,11 @@ class ZenohConfig:
             user/password authentication, and anything else zenoh offers.
         radio: Send the map, depth and colour packed for a radio link, paced by the
             receivers' acknowledgements (``docs/runtime.md``).
+        command_session: Send walk commands and the mode on a zenoh session of their own
+            (a TCP connection to each ``connect`` endpoint): TCP delivers in order, so on
+            a lossy radio a lost segment of this bus's other traffic (its
+            acknowledgements) would hold the commands behind it until retransmitted. A
+            station's choice; needs ``connect`` endpoints.
     """
 
     robot: str = "hexapod"
@@ -90,6 +96,7 @@ class ZenohConfig:
     allow_remote: bool = False
     config_file: Path | None = None
     radio: bool = False
+    command_session: bool = False
 
     def __post_init__(self) -> None:
         if not self.robot or "/" in self.robot or any(c in self.robot for c in "*$#?"):
@@ -102,18 +109,20 @@ class ZenohConfig:
                 f"listening on {', '.join(remote)} reaches beyond this machine; "
                 "allow it explicitly (--listen-remote) or listen on 127.0.0.1"
             )
+        if self.command_session and not self.connect:
+            raise ConfigError("a session of its own for commands needs endpoints to connect to")
         if self.config_file is not None and not Path(self.config_file).is_file():
             raise ConfigError(f"zenoh configuration file {self.config_file} does not exist")
 
-    def zenoh_config(self) -> zenoh.Config:
-        """The zenoh configuration these settings describe."""
+    def zenoh_config(self, listen: bool = True) -> zenoh.Config:
+        """The zenoh configuration these settings describe (without listening, if not)."""
         config = (
             zenoh.Config.from_file(str(self.config_file))
             if self.config_file is not None
             else zenoh.Config()
         )
         config.insert_json5("mode", json.dumps("peer"))
-        config.insert_json5("listen/endpoints", json.dumps(list(self.listen)))
+        config.insert_json5("listen/endpoints", json.dumps(list(self.listen) if listen else []))
         config.insert_json5("connect/endpoints", json.dumps(list(self.connect)))
         config.insert_json5("scouting/multicast/enabled", json.dumps(self.scouting))
         config.insert_json5("adminspace/enabled", "true")  # for listening_locators()
@@ -137,6 +146,11 @@ class ZenohBus:
         self.config = config or ZenohConfig()
         self.prefix = f"{KEY_PREFIX}/{self.config.robot}"
         self.session = zenoh.open(self.config.zenoh_config())
+        self.command_session = (
+            zenoh.open(self.config.zenoh_config(listen=False))
+            if self.config.command_session
+            else None
+        )
         self.stats: dict[str, TopicStats] = defaultdict(TopicStats)
         self.received: dict[str, TopicStats] = defaultdict(TopicStats)
         self._counts = _Counts()
@@ -187,7 +201,10 @@ class ZenohBus:
         publisher = self._publishers.get(topic)
         if publisher is None:
             priority, express = PRIORITIES.get(topic, ("DATA", False))
-            publisher = self._publishers[topic] = self.session.declare_publisher(
+            session = self.session
+            if self.command_session is not None and topic in COMMAND_TOPICS:
+                session = self.command_session
+            publisher = self._publishers[topic] = session.declare_publisher(
                 self.key(topic),
                 priority=getattr(zenoh.Priority, priority),
                 congestion_control=zenoh.CongestionControl.DROP,
@@ -327,7 +344,9 @@ class ZenohBus:
         return []
 
     def close(self) -> None:
-        """Close the session."""
+        """Close the session (and the one for commands)."""
+        if self.command_session is not None:
+            self.command_session.close()
         self.session.close()
 
     def __enter__(self) -> ZenohBus:

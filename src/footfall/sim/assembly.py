@@ -19,7 +19,7 @@ from footfall.backends import BackendSetup, HexapodBackend
 from footfall.backends.attitude import ImuAttitude, PoseAttitude
 from footfall.backends.registry import BACKENDS
 from footfall.control_loop import WalkingGraph, WalkLog
-from footfall.messages import GaitState, GroundPrior
+from footfall.messages import DepthFrame, GaitState, GroundPrior
 from footfall.metrics import walk_metrics
 from footfall.motion.walker import WalkController
 from footfall.nodes.mapping import MappingNode
@@ -31,6 +31,7 @@ from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus
 from footfall.runtime.cpu_meter import CpuMeter, MeteredBus
 from footfall.runtime.faults import FaultyLink
+from footfall.runtime.node_thread import NodeThread
 from footfall.runtime.scheduler import WallClockScheduler
 from footfall.sim.task import TerrainTask
 from footfall.sim.terrain import Terrain
@@ -48,6 +49,51 @@ from footfall.sim.walk_settings import WalkResult, WalkSettings
 
 # The ground around the standing robot is known from its feet within this radius [m].
 START_PRIOR_RADIUS = 0.6
+# What may wait for the perception thread (a newer one replaces the oldest): a camera's
+# render, depth frames from a camera that publishes from the control loop.
+PERCEPTION_WAITING = {"camera": 1, DepthFrame.TOPIC: 2}
+
+
+def open_sources(
+    settings: WalkSettings,
+    backend: HexapodBackend,
+    sensors: Bus,
+    meter: CpuMeter,
+    thread: NodeThread | None,
+    color: bool,
+    color_hz: float | None,
+) -> tuple[CameraSource, str]:
+    """The camera and pose source the settings name, publishing on ``sensors``.
+
+    A camera may take ``thread`` for its heavy work; its pose source then answers it on
+    that thread. Returns the camera and its name on ``meter`` (the simulator's own sources
+    are charged as the simulator's: ``sim_camera``, ``sim_pose``).
+    """
+    camera_node = ("sim_" if settings.camera_source == "sim" else "") + "camera"
+    pose_node = ("sim_" if settings.pose_source == "sim" else "") + "pose"
+    camera = CAMERAS.get(settings.camera_source).open(
+        SourceSetup(
+            MeteredBus(sensors, meter, camera_node),
+            backend,
+            settings.camera,
+            color,
+            options=dict(settings.camera_options),
+            color_hz=color_hz,
+            thread=thread,
+            thread_bus=MeteredBus(thread.bus, meter, camera_node) if thread else None,
+        )
+    )
+    on_thread = thread is not None and getattr(camera, "thread", None) is thread
+    POSES.get(settings.pose_source).open(
+        SourceSetup(
+            MeteredBus(thread.bus if on_thread else sensors, meter, pose_node),
+            backend,
+            settings.camera,
+            camera=camera,
+            options=dict(settings.pose_options),
+        )
+    )
+    return camera, camera_node
 
 
 @dataclass
@@ -78,6 +124,8 @@ class WalkingRobot:
         meter: CPU time and latency per node (the simulator's under names from ``sim``).
         camera_node: The camera source's name on the meter (``sim_camera`` for the
             simulator's rendered camera).
+        perception_thread: The thread the camera's render, the pose source and the mapping
+            node run on, when not the control loop's.
     """
 
     spec: HexapodSpec
@@ -95,6 +143,7 @@ class WalkingRobot:
     control_cpu_seconds: float = 0.0
     meter: CpuMeter = field(default_factory=CpuMeter)
     camera_node: str = "camera"
+    perception_thread: NodeThread | None = None
 
     @classmethod
     def build(
@@ -108,6 +157,7 @@ class WalkingRobot:
         log_ticks: int | None = None,
         color_hz: float | None = None,
         meter: CpuMeter | None = None,
+        perception_thread: bool = False,
     ) -> WalkingRobot:
         """Put the robot on the terrain, let it settle, and start its nodes on ``bus``.
 
@@ -116,7 +166,12 @@ class WalkingRobot:
         first frame. The camera and the pose source publish through a faulty link when the
         settings ask for faults. With ``color`` the camera also renders colour images (for
         a station), at most ``color_hz`` a second when given. Each node's work is charged
-        to it on ``meter`` (a new one when None).
+        to it on ``meter`` (a new one when None). With ``perception_thread`` the mapping node,
+        the simulator's render and the pose source answering it run on a thread of their
+        own (:mod:`footfall.runtime.node_thread`; the render stays in the loop when faults
+        are injected between the sensors and the rest): a robot on the wall clock then
+        never waits for a frame; its maps reach the control loop at the next tick. A
+        simulated walk keeps them in the loop, repeatable to the bit.
         """
         meter = meter if meter is not None else CpuMeter()
         camera_mount = None if settings.blind else settings.camera
@@ -124,7 +179,7 @@ class WalkingRobot:
         setup = BackendSetup(spec, height, terrain, camera_mount, dict(settings.backend_options))
         backend = BACKENDS.get(settings.backend).open(setup)
         backend.advance(settings.settle_seconds)
-        planner = camera = mapping = guard = None
+        planner = camera = mapping = guard = thread = None
         camera_node = "camera"
         link = FaultyLink(bus, settings.faults, settings.seed) if settings.faults.active else None
         if not settings.blind:
@@ -134,35 +189,20 @@ class WalkingRobot:
             body = standing.position_body_in_world
             if body is None:
                 body = np.array([*terrain.start, float(terrain.height(*terrain.start)) + height])
+            if perception_thread:
+                thread = NodeThread(bus, "perception", waiting=PERCEPTION_WAITING)
             mapping = MappingNode(
-                MeteredBus(bus, meter, "mapping"),
+                MeteredBus(thread.bus if thread is not None else bus, meter, "mapping"),
                 settings.map,
                 settings.score,
                 centre=(body[0], body[1]),
                 reject_repeats=True,
             )
             sensors: Bus = link if link is not None else bus
-            # The simulator's own sources are charged as the simulator's.
-            camera_node = ("sim_" if settings.camera_source == "sim" else "") + "camera"
-            pose_node = ("sim_" if settings.pose_source == "sim" else "") + "pose"
-            camera = CAMERAS.get(settings.camera_source).open(
-                SourceSetup(
-                    MeteredBus(sensors, meter, camera_node),
-                    backend,
-                    settings.camera,
-                    color,
-                    options=dict(settings.camera_options),
-                    color_hz=color_hz,
-                )
-            )
-            POSES.get(settings.pose_source).open(
-                SourceSetup(
-                    MeteredBus(sensors, meter, pose_node),
-                    backend,
-                    settings.camera,
-                    camera=camera,
-                    options=dict(settings.pose_options),
-                )
+            # Injected faults stand between the sensors and the rest, on the control loop.
+            offered = thread if link is None else None
+            camera, camera_node = open_sources(
+                settings, backend, sensors, meter, offered, color, color_hz
             )
             guard = PoseGuardNode(MeteredBus(bus, meter, "pose_guard"))
             if hasattr(backend, "attitude") and backend.attitude is None:
@@ -203,6 +243,7 @@ class WalkingRobot:
             link,
             meter=meter,
             camera_node=camera_node,
+            perception_thread=thread.start() if thread is not None else None,
         )
 
     def step(self, t: float, dt: float) -> None:
@@ -218,6 +259,8 @@ class WalkingRobot:
                 self.backend.advance(t - self.simulated_until)
         if self.link is not None:
             self.link.advance(t)
+        if self.perception_thread is not None:
+            self.perception_thread.spin()  # the frames and maps made since the last tick
         t0, cpu0 = time.perf_counter(), time.thread_time()
         self.graph.step(t, dt)
         self.control_seconds = time.perf_counter() - t0
@@ -228,9 +271,11 @@ class WalkingRobot:
                 self.camera.tick(t + dt)
 
     def close(self) -> None:
-        """Release the renderer, and the backend's port or device (one that has them)."""
+        """Release the renderer, stop the perception thread, close the backend's port."""
         if self.camera is not None:
-            self.camera.close()
+            self.camera.close()  # on the perception thread, if it renders there
+        if self.perception_thread is not None:
+            self.perception_thread.close()
         close = getattr(self.backend, "close", None)
         if callable(close):
             close()
@@ -292,6 +337,11 @@ class WalkingRobot:
                 frames=self.mapping.frames,
                 **self.mapping.counts(),
                 **self.mapping.timing(),
+                frames_replaced_waiting=(
+                    sum(self.perception_thread.dropped.values())
+                    if self.perception_thread is not None
+                    else 0
+                ),
                 camera=self.camera.timing(),
             )
         if isinstance(scheduler, WallClockScheduler):

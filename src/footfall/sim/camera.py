@@ -45,17 +45,26 @@ class SimDepthCamera:
             0.0,
             mount.max_range,
         )
-        self._renderer = mujoco.Renderer(model, height=mount.height, width=mount.width)
-        # Shadows and reflections change no depth but cost most of a colour frame's time
-        # in a software renderer (40 ms -> 6 ms at 320 x 240); the operator's view does
-        # without them.
-        flags = self._renderer.scene.flags
-        flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
-        flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
-        self._renderer.enable_depth_rendering()
         self._scene_option = mujoco.MjvOption()
         self._scene_option.geomgroup[ROBOT_GEOM_GROUP] = 0
         self._scene_option.sitegroup[:] = 0  # sites are markers, not surfaces
+        self._open_renderer: mujoco.Renderer | None = None
+
+    @property
+    def _renderer(self) -> mujoco.Renderer:
+        """The renderer, made on first use: its GL context belongs to the thread using it."""
+        if self._open_renderer is None:
+            mount, model = self.mount, self._model
+            renderer = mujoco.Renderer(model, height=mount.height, width=mount.width)
+            # Shadows and reflections change no depth but cost most of a colour frame's
+            # time in a software renderer (40 ms -> 6 ms at 320 x 240); the operator's view
+            # does without them.
+            flags = renderer.scene.flags
+            flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+            flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
+            renderer.enable_depth_rendering()
+            self._open_renderer = renderer
+        return self._open_renderer
 
     def pose(self, data: mujoco.MjData) -> Pose:
         """True pose of the optical frame in the world."""
@@ -82,5 +91,7 @@ class SimDepthCamera:
             self._renderer.enable_depth_rendering()
 
     def close(self) -> None:
-        """Release the rendering context."""
-        self._renderer.close()
+        """Release the rendering context (on the thread that rendered)."""
+        if self._open_renderer is not None:
+            self._open_renderer.close()
+            self._open_renderer = None

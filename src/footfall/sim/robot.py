@@ -107,6 +107,7 @@ def run_robot(
         command_timeout=settings.command_timeout,
         color=True,
         color_hz=settings.outgoing.get("color"),  # rendered no more often than sent
+        perception_thread=True,  # a frame's render and fusion never hold up a command
     )
     if on_build is not None:
         on_build(robot)

@@ -78,6 +78,8 @@ class MappingMetrics:
         map_offset_max_m: Largest vertical drift correction [m].
         frames_at_alternative_pose: Frames fused at the estimate's own pose after a jump.
         map_update_ms_median: Median time to fuse a frame [ms].
+        frames_replaced_waiting: Frames a newer one replaced while they waited for a
+            mapping thread (a robot's mapping that fell behind its camera).
         camera: The camera source's own timing figures (``render_ms_median`` for the
             simulated one).
     """
@@ -89,6 +91,7 @@ class MappingMetrics:
     map_offset_max_m: float
     frames_at_alternative_pose: int
     map_update_ms_median: float
+    frames_replaced_waiting: int = 0
     camera: dict[str, float] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, object]:
