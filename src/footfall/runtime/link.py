@@ -178,7 +178,8 @@ class LinkSender:
             packed = pack_depth(message)
         else:
             packed = pack_color(message)
-        data = _with_link_fields(packed, self._sequence, offered).encode()
+        stamped = dataclasses.replace(packed, link_sequence=self._sequence, offered_at=offered)
+        data = stamped.encode()
         self._in_flight[self._sequence] = (now, len(data))
         self.counts.sent[topic] += 1
         self.counts.sent_bytes[topic] += len(data)
@@ -210,10 +211,6 @@ class LinkSender:
     def whole_map_wanted(self, request: WholeMapRequest) -> None:
         """A receiver asked for a whole map: the next map goes whole."""
         self.maps.want_whole = True
-
-
-def _with_link_fields(packed, sequence: int, offered: float):
-    return dataclasses.replace(packed, link_sequence=sequence, offered_at=offered)
 
 
 class LinkReceiver:

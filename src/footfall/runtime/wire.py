@@ -137,9 +137,19 @@ def _layer_bytes(layers: tuple[np.ndarray, ...]) -> bytes:
     )
 
 
+def _layer_sizes(count: int) -> tuple[int, ...]:
+    """Bytes of each layer for ``count`` cells: heights, spread, score, known, valid."""
+    return (2 * count, 2 * count, count, _bits(count), _bits(count))
+
+
+def _bits(count: int) -> int:
+    """Bytes of ``count`` bits."""
+    return (count + 7) // 8
+
+
 def _read_layers(raw: memoryview, count: int) -> tuple[tuple[np.ndarray, ...], int]:
     """``count`` cells of each layer from ``raw``, and how many bytes they took."""
-    sizes = (2 * count, 2 * count, count, (count + 7) // 8, (count + 7) // 8)
+    sizes = _layer_sizes(count)
     if len(raw) < sum(sizes):
         raise MessageError(f"packed map holds {len(raw)} bytes, {count} cells need {sum(sizes)}")
     out, at = [], 0
@@ -242,8 +252,8 @@ class MapUnpacker:
         """
         shape, corner = (packed.rows, packed.cols), corner_of(packed)
         cells = packed.rows * packed.cols
-        limit = 2 * ((cells + 7) // 8) + 5 * cells + (cells + 7) // 8
-        raw = _decompress(packed.cells, limit)
+        # At most: a mask of the changed cells, then every cell's layers.
+        raw = _decompress(packed.cells, _bits(cells) + sum(_layer_sizes(cells)))
         if packed.base == 0:
             arrays, used = _read_layers(raw, cells)
             arrays = tuple(a.reshape(shape) for a in arrays)
@@ -255,7 +265,7 @@ class MapUnpacker:
             whole = self._wholes.get(packed.base)
             if whole is None or whole.known.shape != shape:
                 return None
-            mask_size = (cells + 7) // 8
+            mask_size = _bits(cells)
             if len(raw) < mask_size:
                 raise MessageError("packed map changes lack their cell mask")
             mask = np.frombuffer(raw[:mask_size], np.uint8)
