@@ -50,6 +50,9 @@ LIVE_FPS = 15
 QUEUE_ITEMS = 512
 # A recording's items read ahead of the reader.
 PLAYBACK_ITEMS = 8
+# A recording has ended once librealsense said so and no frame has come for this long: the
+# status may come while its sensors' last frames are still being handed over [s].
+ENDED_QUIET_S = 0.2
 
 
 class RealSenseStream:
@@ -87,7 +90,10 @@ class RealSenseStream:
         self._filters = filters.build(self.rs)
         self._color: npt.NDArray[np.uint8] | None = None
         self._ended = threading.Event()
+        self._closed = threading.Event()
         self._lock = threading.Lock()
+        self._handing_over = 0  # frames inside the callback now
+        self._last_frame_at = time.monotonic()
         self._failure: BaseException | None = None
         depth = [p for _, ps in profiles for p in ps if p.stream_type() == self.rs.stream.depth]
         if not depth:
@@ -228,8 +234,8 @@ class RealSenseStream:
             self._ended.set()
 
     def _put(self, item: object) -> None:
-        if self._lossless:
-            while not self._ended.is_set():
+        if self._lossless:  # a recording: wait for the reader, lose nothing until closed
+            while not self._closed.is_set():
                 try:
                     self._items.put(item, timeout=0.1)
                     return
@@ -249,6 +255,16 @@ class RealSenseStream:
 
     def _on_frame(self, frame: Any) -> None:
         """Librealsense's callback: convert at once (its frame is only lent)."""
+        with self._lock:
+            self._handing_over += 1
+        try:
+            self._convert(frame)
+        finally:
+            with self._lock:
+                self._handing_over -= 1
+                self._last_frame_at = time.monotonic()
+
+    def _convert(self, frame: Any) -> None:
         rs = self.rs
         try:
             kind = frame.get_profile().stream_type()
@@ -299,10 +315,17 @@ class RealSenseStream:
             try:
                 return self._items.get(timeout=0.05)
             except queue.Empty:
-                if self._ended.is_set() and self._items.empty():
+                if self._ended.is_set() and self._quiet():
                     return None
                 if deadline is not None and time.monotonic() > deadline:
                     return None
+
+    def _quiet(self) -> bool:
+        """Nothing waits, no frame is being handed over, and none came for a while."""
+        with self._lock:
+            idle = self._handing_over == 0
+            since = time.monotonic() - self._last_frame_at
+        return idle and self._items.empty() and since > ENDED_QUIET_S
 
     def drain(self) -> list[DepthImage | MotionSample]:
         """Every item waiting now, oldest first (a live camera's robot takes them each tick).
@@ -322,7 +345,7 @@ class RealSenseStream:
     @property
     def ended(self) -> bool:
         """A recording has played to its end and everything was taken."""
-        return self._ended.is_set() and self._items.empty()
+        return self._ended.is_set() and self._quiet()
 
     def connected(self) -> bool:
         """Whether the device is still there (a recording always is)."""
@@ -336,6 +359,7 @@ class RealSenseStream:
     def close(self) -> None:
         """Stop and close every sensor (safe to call twice)."""
         self._ended.set()
+        self._closed.set()
         for sensor in self._sensors:
             for step in (sensor.stop, sensor.close):
                 try:
