@@ -17,7 +17,7 @@ from footfall.messages import GaitState, GaitStatus, MapUpdate, Mode, WalkComman
 from footfall.nodes.navigation import NavigatorNode
 from footfall.planning import traversability
 from footfall.planning.navigation import NavigationConfig, NoRoute, Route, follow_route, plan_route
-from footfall.planning.route_kernels import dijkstra
+from footfall.planning.route_kernels import dijkstra, segment_points, taut_indices
 from footfall.planning.traversability import TraversabilityConfig, cost_grid, span_radius
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import load_spec
@@ -416,17 +416,83 @@ def test_the_navigator_keeps_a_wall_seen_only_between_its_replans():
 def test_a_segment_visits_every_cell_it_crosses(coords):
     """Each cell a straight segment passes through (found by sampling it densely) is one
     of the cells the line-of-sight check looks at, corners clipped included."""
-    from footfall.planning.navigation import _segment_cells
-
     x, _ = _grid_xy()
     grid = cost_grid(_update(np.zeros_like(x)), TraversabilityConfig(), SPAN)
     a, b = np.array(coords[:2]), np.array(coords[2:])
-    visited = {grid.cell_of(p) for p in _segment_cells(grid, a, b)}
+    visited = {grid.cell_of(p) for p in _segment_points(grid, a, b)}
     dense = a + np.linspace(0.0, 1.0, 5001)[:, None] * (b - a)
     # A sample on a grid line (to rounding) touches a cell only at its edge or corner.
     in_cells = (dense - np.asarray(grid.origin)) / grid.resolution
     off_lines = np.all(np.abs(in_cells - np.round(in_cells)) > 1e-6, axis=1)
     assert {grid.cell_of(p) for p in dense[off_lines]} <= visited
+
+
+def _segment_points(grid, a, b):
+    (ox, oy), res = grid.origin, grid.resolution
+    return segment_points(ox, oy, res, a[0], a[1], b[0], b[1])
+
+
+def reference_taut(cost, origin, resolution, points):
+    """String pulling as plain NumPy, point by point (what the compiled kernel must keep)."""
+
+    def cost_at(xy):
+        ij = np.floor((xy - np.asarray(origin)) / resolution).astype(np.int64)
+        n, m = cost.shape
+        on = (ij[:, 0] >= 0) & (ij[:, 0] < n) & (ij[:, 1] >= 0) & (ij[:, 1] < m)
+        out = np.full(len(xy), np.inf)
+        out[on] = cost[ij[on, 0], ij[on, 1]]
+        return out
+
+    def cells_on(a, b):  # a point in every cell the segment crosses, from its grid lines
+        u, v = (a - np.asarray(origin)) / resolution, (b - np.asarray(origin)) / resolution
+        cuts = [np.array([0.0, 1.0])]
+        for k in range(2):
+            if abs(v[k] - u[k]) > 1e-12:
+                lo, hi = sorted((u[k], v[k]))
+                lines = np.arange(math.floor(lo) + 1, math.ceil(hi))
+                cuts.append((lines - u[k]) / (v[k] - u[k]))
+        t = np.unique(np.clip(np.concatenate(cuts), 0.0, 1.0))
+        t = np.concatenate([[0.0], 0.5 * (t[:-1] + t[1:]), [1.0]])
+        return a + t[:, None] * (b - a)
+
+    along = cost_at(points)
+    kept, i = [0], 0
+    while i < len(points) - 1:
+        best = i + 1
+        for j in range(i + 2, len(points)):
+            worst = float(np.max(along[i : j + 1]))
+            line = cost_at(cells_on(points[i], points[j]))
+            if not (np.all(np.isfinite(line)) and float(np.max(line)) <= worst + 1e-9):
+                break
+            best = j
+        kept.append(best)
+        i = best
+    return kept
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    costs=st.lists(
+        st.sampled_from([1.0, 1.0, 1.0, 1.5, 2.0, np.inf, np.nan]), min_size=400, max_size=400
+    ),
+    steps=st.lists(st.integers(0, 7), min_size=1, max_size=40),
+    start=st.tuples(st.integers(0, 19), st.integers(0, 19)),
+    origin=st.tuples(st.floats(-2.0, 2.0), st.floats(-2.0, 2.0)),
+    resolution=st.sampled_from([0.02, 0.05, 0.1]),
+)
+def test_compiled_string_pulling_keeps_the_points_the_plain_rule_keeps(
+    costs, steps, start, origin, resolution
+):
+    """On any cost grid (cheap, dear, lethal and unknown cells) and any 8-connected path of
+    cell centres, leaving the grid or not, the kernel keeps exactly the reference's points."""
+    cost = np.array(costs).reshape(20, 20)
+    moves = [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)]
+    cells = [start]
+    for k in steps:
+        cells.append((cells[-1][0] + moves[k][0], cells[-1][1] + moves[k][1]))
+    points = np.asarray(origin) + (np.array(cells, dtype=np.float64) + 0.5) * resolution
+    kept = taut_indices(cost, origin[0], origin[1], resolution, points)
+    assert kept.tolist() == reference_taut(cost, origin, resolution, points)
 
 
 @settings(max_examples=60, deadline=None)

@@ -32,7 +32,7 @@ from scipy import ndimage
 from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
 from footfall.messages import WalkCommand
-from footfall.planning.route_kernels import dijkstra
+from footfall.planning.route_kernels import dijkstra, taut_indices
 from footfall.planning.traversability import CostGrid, TraversabilityConfig
 from footfall.robot.planar import PlanarPose
 
@@ -231,40 +231,6 @@ def _samples(
     return np.vstack(out), np.concatenate(lengths)
 
 
-def _cost_at(
-    cost: npt.NDArray[np.float64], grid: CostGrid, xy: npt.NDArray[np.float64], outside: float
-) -> npt.NDArray[np.float64]:
-    """Cost per metre at world points; ``outside`` beyond the grid."""
-    ij = np.floor((xy - np.asarray(grid.origin)) / grid.resolution).astype(np.int64)
-    n, m = cost.shape
-    on = (ij[:, 0] >= 0) & (ij[:, 0] < n) & (ij[:, 1] >= 0) & (ij[:, 1] < m)
-    out = np.full(len(xy), outside)
-    out[on] = cost[ij[on, 0], ij[on, 1]]
-    return out
-
-
-def _segment_cells(
-    grid: CostGrid, a: npt.NDArray[np.float64], b: npt.NDArray[np.float64]
-) -> npt.NDArray[np.float64]:
-    """One point inside every cell the segment ``a``-``b`` passes through [m].
-
-    The segment is cut where it crosses a grid line; the middle of each piece lies in the
-    cell that piece crosses, so no cell it clips at a corner is missed (as samples at a
-    fixed spacing can). The ends are included, for an end on a cell's edge.
-    """
-    res, origin = grid.resolution, np.asarray(grid.origin)
-    u, v = (a - origin) / res, (b - origin) / res
-    cuts = [np.array([0.0, 1.0])]
-    for k in range(2):
-        if abs(v[k] - u[k]) > 1e-12:
-            lo, hi = sorted((u[k], v[k]))
-            lines = np.arange(math.floor(lo) + 1, math.ceil(hi))
-            cuts.append((lines - u[k]) / (v[k] - u[k]))
-    t = np.unique(np.clip(np.concatenate(cuts), 0.0, 1.0))
-    t = np.concatenate([[0.0], 0.5 * (t[:-1] + t[1:]), [1.0]])
-    return a + t[:, None] * (b - a)
-
-
 def _near_polyline(
     grid: CostGrid, points: npt.NDArray[np.float64], radius_m: float
 ) -> npt.NDArray[np.bool_]:
@@ -287,24 +253,15 @@ def taut(
 
     From each kept point the segment reaches on along the path for as long as it crosses
     no cell dearer than the dearest the path itself crosses meanwhile, and never a lethal
-    one: the 8-connected zig-zags go, the detours stay.
+    one: the 8-connected zig-zags go, the detours stay (compiled:
+    :func:`~footfall.planning.route_kernels.taut_indices`).
     """
     if len(points) <= 2:
         return points.copy()
-    along = _cost_at(cost, grid, points, np.inf)
-    kept = [0]
-    i = 0
-    while i < len(points) - 1:
-        best = i + 1
-        for j in range(i + 2, len(points)):
-            worst = float(np.max(along[i : j + 1]))
-            line = _cost_at(cost, grid, _segment_cells(grid, points[i], points[j]), np.inf)
-            if not (np.all(np.isfinite(line)) and float(np.max(line)) <= worst + 1e-9):
-                break
-            best = j
-        kept.append(best)
-        i = best
-    return points[kept].copy()
+    ox, oy = (float(v) for v in grid.origin)
+    cells = np.ascontiguousarray(cost, dtype=np.float64)
+    path = np.ascontiguousarray(points, dtype=np.float64)
+    return points[taut_indices(cells, ox, oy, float(grid.resolution), path)].copy()
 
 
 def _aim(

@@ -104,3 +104,86 @@ def dijkstra(cost, start_i, start_j, cell_m, distance, parent):
                 parent[ni, nj] = flat
                 size = _push(keys, values, size, nd, ni * cols + nj)
     return settled
+
+
+@njit(cache=True, nogil=True)
+def segment_points(origin_x, origin_y, cell_m, ax, ay, bx, by):
+    """One point inside every cell the segment ``a``-``b`` passes through [m], shape (k, 2).
+
+    The segment is cut where it crosses a grid line; the middle of each piece lies in the
+    cell that piece crosses, so no cell it clips at a corner is missed (as samples at a
+    fixed spacing can). The ends are included, for an end on a cell's edge.
+    """
+    u = ((ax - origin_x) / cell_m, (ay - origin_y) / cell_m)
+    v = ((bx - origin_x) / cell_m, (by - origin_y) / cell_m)
+    cuts = [0.0, 1.0]
+    for k in range(2):
+        if abs(v[k] - u[k]) > 1e-12:
+            lo, hi = min(u[k], v[k]), max(u[k], v[k])
+            for line in range(int(np.floor(lo)) + 1, int(np.ceil(hi))):
+                cuts.append((float(line) - u[k]) / (v[k] - u[k]))
+    t = np.sort(np.minimum(np.maximum(np.array(cuts), 0.0), 1.0))
+    unique = [t[0]]
+    for k in range(1, len(t)):
+        if t[k] != t[k - 1]:
+            unique.append(t[k])
+    out = np.empty((len(unique) + 1, 2))
+    dx, dy = bx - ax, by - ay
+    for k in range(len(unique) + 1):
+        if k == 0:
+            s = 0.0
+        elif k == len(unique):
+            s = 1.0
+        else:
+            s = 0.5 * (unique[k - 1] + unique[k])
+        out[k, 0] = ax + s * dx
+        out[k, 1] = ay + s * dy
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _cost_at(cost, origin_x, origin_y, cell_m, x, y):
+    """Cost per metre at a world point; infinite beyond the grid."""
+    i = int(np.floor((x - origin_x) / cell_m))
+    j = int(np.floor((y - origin_y) / cell_m))
+    if i < 0 or j < 0 or i >= cost.shape[0] or j >= cost.shape[1]:
+        return np.inf
+    return cost[i, j]
+
+
+@njit(cache=True, nogil=True)
+def taut_indices(cost, origin_x, origin_y, cell_m, points):
+    """The points of a grid path that string pulling keeps, as indices into ``points``.
+
+    From each kept point the segment reaches on along the path for as long as it crosses
+    no cell dearer than the dearest the path itself crosses meanwhile (to 1e-9), and never
+    a lethal (infinite) or unknown (NaN) one.
+    """
+    n = len(points)
+    along = np.empty(n)
+    for k in range(n):
+        along[k] = _cost_at(cost, origin_x, origin_y, cell_m, points[k, 0], points[k, 1])
+    kept = [0]
+    i = 0
+    while i < n - 1:
+        best = i + 1
+        worst = max(along[i], along[i + 1])
+        unknown = np.isnan(along[i]) or np.isnan(along[i + 1])
+        for j in range(i + 2, n):
+            worst = max(worst, along[j])
+            unknown = unknown or np.isnan(along[j])
+            line = segment_points(
+                origin_x, origin_y, cell_m, points[i, 0], points[i, 1], points[j, 0], points[j, 1]
+            )
+            passable = not unknown
+            for k in range(len(line)):
+                c = _cost_at(cost, origin_x, origin_y, cell_m, line[k, 0], line[k, 1])
+                if not (np.isfinite(c) and c <= worst + 1e-9):
+                    passable = False
+                    break
+            if not passable:
+                break
+            best = j
+        kept.append(best)
+        i = best
+    return np.array(kept)
