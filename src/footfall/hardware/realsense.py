@@ -55,6 +55,19 @@ PLAYBACK_ITEMS = 8
 ENDED_QUIET_S = 0.2
 
 
+def imu_in_camera(rs: Any, profiles: list[tuple[Any, list[Any]]], depth: Any) -> Pose | None:
+    """The IMU's pose in the depth optical frame of profile ``depth``; None without an IMU."""
+    motion = [p for _, ps in profiles for p in ps if p.stream_type() == rs.stream.gyro]
+    motion += [p for _, ps in profiles for p in ps if p.stream_type() == rs.stream.accel]
+    if not motion:
+        return None
+    try:
+        return extrinsics_pose(motion[0].get_extrinsics_to(depth))
+    except RuntimeError:
+        # No extrinsics recorded: the D4xx IMU axes are the depth camera's.
+        return Pose.identity()
+
+
 class RealSenseStream:
     """A device or a recording, its frames handed over in arrival order.
 
@@ -99,7 +112,7 @@ class RealSenseStream:
         if not depth:
             raise CameraError(f"{self.name()} has no depth stream")
         self._depth_profile = depth[0]
-        self.imu_in_camera = self._imu_in_camera(profiles)
+        self.imu_in_camera = imu_in_camera(self.rs, profiles, self._depth_profile)
         self.has_imu = self.imu_in_camera is not None
         self._sensors = []
         if recording:
@@ -215,19 +228,6 @@ class RealSenseStream:
         except RuntimeError:
             return "the RealSense device"
         return f"{name} {serial}"
-
-    def _imu_in_camera(self, profiles: list[tuple[Any, list[Any]]]) -> Pose | None:
-        """The IMU's pose in the depth optical frame, or None without an IMU."""
-        rs = self.rs
-        motion = [p for _, ps in profiles for p in ps if p.stream_type() == rs.stream.gyro]
-        motion += [p for _, ps in profiles for p in ps if p.stream_type() == rs.stream.accel]
-        if not motion:
-            return None
-        try:
-            return extrinsics_pose(motion[0].get_extrinsics_to(self._depth_profile))
-        except RuntimeError:
-            # No extrinsics recorded: the D4xx IMU axes are the depth camera's.
-            return Pose.identity()
 
     def _on_status(self, status: Any) -> None:
         if status == self.rs.playback_status.stopped:
