@@ -15,10 +15,10 @@ from footfall.backends.attitude import ImuAttitude
 from footfall.cli import main
 from footfall.errors import CameraError, ConfigError, DatasetError
 from footfall.hardware.realsense import RealSenseStream
-from footfall.hardware.realsense_camera import RealSenseCamera, camera_table_pose
+from footfall.hardware.realsense_camera import RealSenseCamera
 from footfall.hardware.realsense_types import RealSenseFilters, depth_units
 from footfall.messages import DepthFrame, ImuReading, LogLine, PoseEstimate
-from footfall.robot.spec import load_spec
+from footfall.robot.spec import camera_placement_from_table, load_spec
 from footfall.runtime.bus import InProcessBus
 from footfall.sensing.camera import PinholeCamera
 from footfall.sim.model import CameraMount
@@ -175,7 +175,8 @@ def test_the_camera_source_stamps_on_the_robot_clock_and_counts_a_stall(simulate
     bus.subscribe(ImuReading.TOPIC, imu.append)
     bus.subscribe(LogLine.TOPIC, log.append)
     stream = RealSenseStream.open_file(recording, realtime=True)
-    mount = camera_table_pose({"position": [0.1, 0.0, 0.05], "pitch_deg": 25.0})
+    table = {"position": [0.1, 0.0, 0.05], "pitch_deg": 25.0}
+    mount = camera_placement_from_table(table).optical_in_body()
     source = RealSenseCamera(bus, stream, mount, stall=0.5)
     start = frames[0].stamp
     t = 10.0
@@ -223,12 +224,13 @@ def test_the_camera_imu_gives_the_robot_its_attitude():
 def test_the_camera_table_places_the_camera_on_the_body():
     """[camera] position and pitch: the optical axis looks ahead and down by the pitch; an
     unknown key is named."""
-    pose = camera_table_pose({"position": [0.13, 0.0, 0.08], "pitch_deg": 30.0})
+    table = {"position": [0.13, 0.0, 0.08], "pitch_deg": 30.0}
+    pose = camera_placement_from_table(table).optical_in_body()
     forward = pose.rotation.apply([0.0, 0.0, 1.0])
     np.testing.assert_allclose(forward, [np.cos(np.radians(30)), 0, -np.sin(np.radians(30))])
     np.testing.assert_allclose(pose.rotation.apply([1.0, 0.0, 0.0]), [0.0, -1.0, 0.0], atol=1e-12)
     with pytest.raises(ConfigError, match="tilt"):
-        camera_table_pose({"tilt": 3})
+        camera_placement_from_table({"tilt": 3})
 
 
 def test_imu_readings_record_as_ros_imu_messages():

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from footfall.errors import ConfigError
-from footfall.robot.spec import load_spec
+from footfall.robot.spec import CameraPlacement, load_spec
 
 PHANTOMX_URDF = (
     Path(__file__).parents[2] / "shared/data/robots/phantomx_mark4/urdf/pxmark4.urdf.xacro"
@@ -100,3 +100,20 @@ def test_bad_toml_syntax_is_reported(tmp_path):
     path.write_text("name = \n")
     with pytest.raises(ConfigError, match=r"broken\.toml"):
         load_spec(path)
+
+
+def test_the_camera_table_places_the_robots_camera(tmp_path, default_spec):
+    """A robot file's [camera] table is its camera's place (degrees in the file, radians in
+    the spec); without one the camera sits where the default robot's does; a key it does not
+    know or a position of two numbers is named."""
+    text = (Path(__file__).parents[1] / "src/footfall/robots/default.toml").read_text()
+    path = tmp_path / "robot.toml"
+    path.write_text(text + "\n[camera]\nposition = [0.1, 0.02, 0.12]\npitch_deg = 45.0\n")
+    camera = load_spec(path).camera
+    assert camera.position_in_body == (0.1, 0.02, 0.12)
+    assert camera.pitch == pytest.approx(np.radians(45.0)) and camera.roll == camera.yaw == 0.0
+    assert default_spec.camera == CameraPlacement()
+    for table, message in (("tilt_deg = 3.0", "tilt_deg"), ("position = [0.1, 0.0]", "three")):
+        path.write_text(text + f"\n[camera]\n{table}\n")
+        with pytest.raises(ConfigError, match=message):
+            load_spec(path)

@@ -26,12 +26,9 @@ The camera's pose on the body comes from the robot's TOML ``[camera]`` table::
 
 from __future__ import annotations
 
-import math
 from collections import OrderedDict
-from typing import Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from footfall.errors import ConfigError
 from footfall.hardware.realsense import LIVE_FPS, LIVE_SIZE, RealSenseStream
@@ -43,6 +40,7 @@ from footfall.hardware.realsense_types import (
 )
 from footfall.messages import ColorImage, DepthFrame, ImuReading, LogLine
 from footfall.nodes.sources import SourceSetup
+from footfall.robot.spec import CameraPlacement, load_spec
 from footfall.runtime.bus import Bus
 from footfall.sensing.pose import Pose
 
@@ -53,58 +51,12 @@ STAMPS_KEPT = 60
 OPTIONS = ("file", "serial", "width", "height", "fps", "realtime", "robot", "stall", *FILTERS)
 
 
-def optical_in_body(
-    position: tuple[float, float, float], pitch: float, roll: float = 0.0, yaw: float = 0.0
-) -> Pose:
-    """A camera's optical frame (x right, y down, z forward) on the body (x ahead, z up).
-
-    Args:
-        position: Optical centre in the body frame [m].
-        pitch: The optical axis below the body's x axis [rad].
-        roll: About the optical axis, the image's right side down [rad].
-        yaw: The optical axis to the left of the body's x axis [rad].
-    """
-    forward = np.array([math.cos(pitch), 0.0, -math.sin(pitch)])
-    right = np.array([0.0, -1.0, 0.0])
-    down = np.cross(forward, right)
-    level = Rotation.from_matrix(np.stack([right, down, forward], axis=1))
-    rotation = (
-        Rotation.from_euler("z", yaw) * level * Rotation.from_euler("z", roll)
-    )  # roll turns the image about the optical z
-    return Pose(np.asarray(position, dtype=np.float64), rotation)
-
-
-def camera_table_pose(table: dict[str, Any] | None, mount: object = None) -> Pose:
-    """The optical frame on the body from a ``[camera]`` table, else from a simulator's mount.
-
-    Raises:
-        ConfigError: An unknown key or a malformed value, named.
-    """
-    from footfall.sim.model import CameraMount
-
-    default = mount if isinstance(mount, CameraMount) else CameraMount()
-    table = dict(table or {})
-    unknown = sorted(set(table) - {"position", "pitch_deg", "roll_deg", "yaw_deg"})
-    if unknown:
-        raise ConfigError(
-            f"[camera] has no key {', '.join(unknown)}; it takes position, pitch_deg, "
-            "roll_deg, yaw_deg"
-        )
-    try:
-        position = tuple(float(v) for v in table.get("position", default.position_in_body))
-        angles = [
-            math.radians(float(table[key])) if key in table else fallback
-            for key, fallback in (
-                ("pitch_deg", default.pitch),
-                ("roll_deg", 0.0),
-                ("yaw_deg", 0.0),
-            )
-        ]
-    except (TypeError, ValueError) as exc:
-        raise ConfigError(f"[camera] has a malformed value: {exc}") from exc
-    if len(position) != 3 or not all(math.isfinite(v) for v in (*position, *angles)):
-        raise ConfigError(f"[camera] position must be three finite numbers, got {position}")
-    return optical_in_body(position, *angles)  # type: ignore[arg-type]
+def _camera_placement(robot: str | None, mount: object) -> CameraPlacement:
+    """The camera's place on the body: the robot's ``[camera]`` table, else the mount's."""
+    if robot is not None:
+        return load_spec(robot).camera
+    placement = getattr(mount, "placement", None)
+    return placement if isinstance(placement, CameraPlacement) else CameraPlacement()
 
 
 class RealSenseCamera:
@@ -183,14 +135,8 @@ class RealSenseCamera:
                 )
         except ValueError as exc:
             raise ConfigError(f"a RealSense camera option is not a number: {exc}") from exc
-        table = None
-        if "robot" in options:
-            from footfall.robot.spec import BUILTIN_ROBOTS
-            from footfall.robots import read_description
-
-            table = read_description(options["robot"], BUILTIN_ROBOTS).get("camera")
         try:
-            pose = camera_table_pose(table, setup.mount)
+            pose = _camera_placement(options.get("robot"), setup.mount).optical_in_body()
         except ConfigError:
             stream.close()
             raise

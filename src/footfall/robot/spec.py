@@ -12,6 +12,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -19,6 +20,9 @@ import numpy.typing as npt
 from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
 from footfall.robots import read_description
+
+if TYPE_CHECKING:
+    from footfall.sensing.pose import Pose
 
 NUM_LEGS = 6
 BUILTIN_ROBOTS = ("default", "phantomx")
@@ -103,6 +107,85 @@ class ServoGains:
 
 
 @dataclass(frozen=True)
+class CameraPlacement:
+    """Where the depth camera sits on the body: the ``[camera]`` table of a robot's TOML.
+
+    What the camera sees just ahead of the front feet depends on it: a robot whose legs are
+    short must see the ground nearer its body (on a way down a staircase, the tread just past
+    the edge) than a robot whose legs reach farther.
+
+    Attributes:
+        position_in_body: Optical centre in the body frame [m].
+        pitch: The optical axis below the body's x axis [rad].
+        roll: About the optical axis, the image's right side down [rad].
+        yaw: The optical axis to the left of the body's x axis [rad].
+    """
+
+    position_in_body: tuple[float, float, float] = (0.13, 0.0, 0.08)
+    pitch: float = math.radians(30.0)
+    roll: float = 0.0
+    yaw: float = 0.0
+
+    def __post_init__(self) -> None:
+        _require(
+            len(self.position_in_body) == 3,
+            f"camera position must be three numbers, got {self.position_in_body}",
+        )
+        _require(
+            abs(self.pitch) < 0.5 * math.pi,
+            f"camera pitch must lie within +-90 degrees, got {math.degrees(self.pitch):g}",
+        )
+
+    def optical_in_body(self) -> Pose:
+        """The optical frame (x right, y down, z forward) in the body frame (x ahead, z up)."""
+        from scipy.spatial.transform import Rotation
+
+        from footfall.sensing.pose import Pose
+
+        s, c = math.sin(self.pitch), math.cos(self.pitch)
+        forward = np.array([c, 0.0, -s])
+        right = np.array([0.0, -1.0, 0.0])
+        down = np.cross(forward, right)
+        level = Rotation.from_matrix(np.stack([right, down, forward], axis=1))
+        # Yaw turns the camera about the body's z; roll turns the image about the optical z.
+        rotation = Rotation.from_euler("z", self.yaw) * level * Rotation.from_euler("z", self.roll)
+        return Pose(np.asarray(self.position_in_body, dtype=np.float64), rotation)
+
+
+CAMERA_KEYS = ("position", "pitch_deg", "roll_deg", "yaw_deg")
+
+
+def camera_placement_from_table(table: dict | None) -> CameraPlacement:
+    """A :class:`CameraPlacement` from a ``[camera]`` table; the default for keys it lacks.
+
+    Raises:
+        ConfigError: An unknown key or a malformed value, named.
+    """
+    table = dict(table or {})
+    unknown = sorted(set(table) - set(CAMERA_KEYS))
+    if unknown:
+        raise ConfigError(
+            f"[camera] has no key {', '.join(unknown)}; it takes {', '.join(CAMERA_KEYS)}"
+        )
+    default = CameraPlacement()
+    try:
+        position = tuple(float(v) for v in table.get("position", default.position_in_body))
+        pitch, roll, yaw = (
+            math.radians(float(table[key])) if key in table else fallback
+            for key, fallback in (
+                ("pitch_deg", default.pitch),
+                ("roll_deg", default.roll),
+                ("yaw_deg", default.yaw),
+            )
+        )
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"[camera] has a malformed value: {exc}") from exc
+    if len(position) != 3 or not all(math.isfinite(v) for v in (*position, pitch, roll, yaw)):
+        raise ConfigError(f"[camera] position must be three finite numbers, got {position}")
+    return CameraPlacement(position, pitch, roll, yaw)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
 class HexapodSpec:
     """A hexapod's geometry, masses and servos.
 
@@ -125,6 +208,7 @@ class HexapodSpec:
             leg's workspace near its rest stance sets it.
         stride_length: Longest stride the legs allow [m]: the distance a foot travels over
             the ground in one swing, and the body's advance per gait cycle.
+        camera: Where the depth camera sits on the body.
     """
 
     name: str
@@ -143,6 +227,7 @@ class HexapodSpec:
     body_height: float = 0.09
     max_step_height: float = 0.10
     stride_length: float = 0.15
+    camera: CameraPlacement = field(default_factory=CameraPlacement)
 
     def __post_init__(self) -> None:
         for name, value in _numbers(self):
@@ -275,6 +360,7 @@ def spec_from_dict(data: dict) -> HexapodSpec:
             body_height=float(stance.get("body_height", 0.09)),
             max_step_height=float(stance.get("max_step_height", 0.10)),
             stride_length=float(stance.get("stride_length", 0.15)),
+            camera=camera_placement_from_table(data.get("camera")),
         )
     except KeyError as exc:
         raise ConfigError(f"robot description is missing the key {exc}") from exc

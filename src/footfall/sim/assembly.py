@@ -33,6 +33,7 @@ from footfall.runtime.cpu_meter import CpuMeter, MeteredBus
 from footfall.runtime.faults import FaultyLink
 from footfall.runtime.node_thread import NodeThread
 from footfall.runtime.scheduler import WallClockScheduler
+from footfall.sim.model import CameraMount
 from footfall.sim.task import TerrainTask
 from footfall.sim.terrain import Terrain
 from footfall.sim.truth import FootholdMetrics, TrueScores, foothold_metrics
@@ -56,6 +57,7 @@ PERCEPTION_WAITING = {"camera": 1, DepthFrame.TOPIC: 2}
 
 def open_sources(
     settings: WalkSettings,
+    mount: CameraMount,
     backend: HexapodBackend,
     sensors: Bus,
     meter: CpuMeter,
@@ -64,6 +66,8 @@ def open_sources(
     color_hz: float | None,
 ) -> tuple[CameraSource, str]:
     """The camera and pose source the settings name, publishing on ``sensors``.
+
+    ``mount`` is the settings' camera placed on the robot (:meth:`CameraMount.on`).
 
     A camera may take ``thread`` for its heavy work; its pose source then answers it on
     that thread. Returns the camera and its name on ``meter`` (the simulator's own sources
@@ -75,7 +79,7 @@ def open_sources(
         SourceSetup(
             MeteredBus(sensors, meter, camera_node),
             backend,
-            settings.camera,
+            mount,
             color,
             options=dict(settings.camera_options),
             color_hz=color_hz,
@@ -88,7 +92,7 @@ def open_sources(
         SourceSetup(
             MeteredBus(thread.bus if on_thread else sensors, meter, pose_node),
             backend,
-            settings.camera,
+            mount,
             camera=camera,
             options=dict(settings.pose_options),
         )
@@ -174,7 +178,7 @@ class WalkingRobot:
         simulated walk keeps them in the loop, repeatable to the bit.
         """
         meter = meter if meter is not None else CpuMeter()
-        camera_mount = None if settings.blind else settings.camera
+        camera_mount = None if settings.blind else settings.camera.on(spec.camera)
         height = settings.command.body_height
         setup = BackendSetup(spec, height, terrain, camera_mount, dict(settings.backend_options))
         backend = BACKENDS.get(settings.backend).open(setup)
@@ -201,8 +205,9 @@ class WalkingRobot:
             sensors: Bus = link if link is not None else bus
             # Injected faults stand between the sensors and the rest, on the control loop.
             offered = thread if link is None else None
+            assert camera_mount is not None
             camera, camera_node = open_sources(
-                settings, backend, sensors, meter, offered, color, color_hz
+                settings, camera_mount, backend, sensors, meter, offered, color, color_hz
             )
             guard = PoseGuardNode(MeteredBus(bus, meter, "pose_guard"))
             if hasattr(backend, "attitude") and backend.attitude is None:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from footfall.biped.body import JOINTS, SIDES, BipedSpec
+from footfall.robot.spec import CameraPlacement
 from footfall.sim.model import ROBOT_GEOM_GROUP, CameraMount
 
 TIMESTEP = 0.002  # [s]
@@ -80,8 +81,7 @@ def joint_names() -> list[str]:
 def camera_mount(spec: BipedSpec, width: int = 160, height: int = 120) -> CameraMount:
     """The head camera (a RealSense-like depth camera) at the spec's mount."""
     return CameraMount(
-        position_in_body=spec.camera_position,
-        pitch=spec.camera_pitch,
+        placement=CameraPlacement(position_in_body=spec.camera_position, pitch=spec.camera_pitch),
         width=width,
         height=height,
         max_range=4.0,

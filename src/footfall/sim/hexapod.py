@@ -37,12 +37,14 @@ class MujocoHexapod:
     ) -> None:
         self.spec = spec
         self.terrain = terrain or Flat()
-        self.camera_mount = camera
+        self.camera_mount = None if camera is None else camera.on(spec.camera)
         height = spec.body_height if body_height is None else body_height
         x0, y0 = self.terrain.start
         ground = float(self.terrain.height(x0, y0))
         pieces = self.terrain.mjcf()
-        self.xml = hexapod_mjcf(spec, pieces, camera, initial_position=(x0, y0, ground + height))
+        self.xml = hexapod_mjcf(
+            spec, pieces, self.camera_mount, initial_position=(x0, y0, ground + height)
+        )
         self.model = mujoco.MjModel.from_xml_string(self.xml)
         for field in pieces.height_fields:
             hfield = self.model.hfield(field.name)

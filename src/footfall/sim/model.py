@@ -10,13 +10,13 @@ are position actuators with high gain and high damping (thesis §3.3), integrate
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from footfall.checks import require_positive
 from footfall.errors import ConfigError
-from footfall.robot.spec import HexapodSpec
+from footfall.robot.spec import CameraPlacement, HexapodSpec
 from footfall.sim.terrain import TerrainXml
 
 TIMESTEP = 0.002  # [s]
@@ -28,13 +28,13 @@ LEG_RADIUS = 0.008  # capsule radius of the leg segments [m]
 class CameraMount:
     """A depth camera on the body, looking ahead and down (a RealSense D435i by default).
 
-    The default mount puts it at the front of the body on a short mast, 8 cm above the body
-    frame, tilted 30 degrees down: from there it sees the ground from just ahead of the
-    front feet to about 1.5 m, and about as wide.
+    Where it sits is the robot's (:attr:`HexapodSpec.camera`, the ``[camera]`` table of its
+    TOML) unless ``placement`` says otherwise. The default robot's puts it at the front of the
+    body on a short mast, 8 cm above the body frame, tilted 30 degrees down: from there it
+    sees the ground from just ahead of the front feet to about 1.5 m, and about as wide.
 
     Attributes:
-        position_in_body: Optical centre in the body frame [m].
-        pitch: Downward tilt of the optical axis below the body's x axis [rad].
+        placement: Where it sits on the body; None: where the robot's description puts it.
         horizontal_fov: Horizontal field of view [rad].
         vertical_fov: Vertical field of view [rad].
         width: Image width [px].
@@ -43,8 +43,7 @@ class CameraMount:
         max_range: Farthest usable depth [m].
     """
 
-    position_in_body: tuple[float, float, float] = (0.13, 0.0, 0.08)
-    pitch: float = math.radians(30.0)
+    placement: CameraPlacement | None = None
     horizontal_fov: float = math.radians(87.0)
     vertical_fov: float = math.radians(58.0)
     width: int = 640
@@ -71,15 +70,27 @@ class CameraMount:
             0.5 * self.height / math.tan(0.5 * self.vertical_fov),
         )
 
+    def on(self, robot: CameraPlacement) -> CameraMount:
+        """This camera, placed where ``robot`` puts it unless it has a placement of its own."""
+        return self if self.placement is not None else replace(self, placement=robot)
+
     def mjcf(self) -> str:
-        """The ``<camera>`` element (MuJoCo cameras look along -z with y up)."""
+        """The ``<camera>`` element (MuJoCo cameras look along -z with y up).
+
+        Raises:
+            ConfigError: The camera has no placement (see :meth:`on`).
+        """
+        if self.placement is None:
+            raise ConfigError("a camera needs a place on the body: CameraMount.on(spec.camera)")
+        optical = self.placement.optical_in_body()
+        # MuJoCo's camera x is the image's right, its y the image's up (the optical -y).
+        x_axis, down = optical.rotation.as_matrix()[:, 0], optical.rotation.as_matrix()[:, 1]
         fx, fy = self.focal_lengths
-        s, c = math.sin(self.pitch), math.cos(self.pitch)
         # Pixel size is arbitrary for MuJoCo; 1 um makes focal lengths in pixels exact.
         pixel = 1e-6
         return (
-            f'<camera name="depth" pos="{_fmt(self.position_in_body)}" '
-            f'xyaxes="0 -1 0 {s:.9g} 0 {c:.9g}" resolution="{self.width} {self.height}" '
+            f'<camera name="depth" pos="{_fmt(self.placement.position_in_body)}" '
+            f'xyaxes="{_fmt9(x_axis)} {_fmt9(-down)}" resolution="{self.width} {self.height}" '
             f'sensorsize="{self.width * pixel:.9g} {self.height * pixel:.9g}" '
             f'focalpixel="{fx:.9g} {fy:.9g}" principalpixel="0 0"/>'
         )
@@ -92,6 +103,11 @@ def joint_names(spec: HexapodSpec) -> list[str]:
 
 def _fmt(values: object) -> str:
     return " ".join(f"{float(v):.6g}" for v in np.ravel(values))
+
+
+def _fmt9(values: object) -> str:
+    """Nine digits; a rotation's rounding noise (1e-17 for an exact 0) written as 0."""
+    return " ".join(f"{float(v) + 0.0:.9g}" for v in np.round(np.ravel(values), 12))
 
 
 def _leg_xml(spec: HexapodSpec, index: int) -> str:
@@ -188,7 +204,7 @@ def hexapod_mjcf(
       <geom name="torso" type="box" size="{sx:.6g} {sy:.6g} {sz:.6g}" mass="{spec.body_mass:.6g}"
             rgba="0.85 0.45 0.1 1"/>
       <site name="imu" pos="0 0 0" size="0.01"/>
-      {camera.mjcf() if camera is not None else ""}
+      {camera.on(spec.camera).mjcf() if camera is not None else ""}
       {legs}
     </body>
   </worldbody>
