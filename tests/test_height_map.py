@@ -247,24 +247,3 @@ def test_assumed_ground_the_camera_sees_through_is_erased(rim_x):
     assert not m.assumed[i, j].any()
     if rim_x is not None:
         assert np.isnan(h[xs > rim_x + 0.02]).all()
-
-
-def test_a_frame_that_sees_only_part_of_a_cell_does_not_lower_it():
-    """A cell holding a stone's corner, seen whole, keeps the stone's top when a later frame
-    sees only its floor (the corner out of the image or behind the edge): a foot must not
-    take the groove beside it for wider than it is. A frame that sees the whole cell lower
-    (the stone gone) does lower it, and one that sees part of it higher raises it."""
-    m = HeightMap(HeightMapConfig(size=32, resolution=0.1))
-    u = (np.arange(16) + 0.5) / 16 * 0.1
-    x, y = (a.ravel() for a in np.meshgrid(u, u, indexing="ij"))
-    corner = (x < 0.05) & (y < 0.05)
-
-    def seen(where: np.ndarray, stone: float, sensor_x: float) -> float:
-        z = np.where(corner, stone, 0.0)
-        m.integrate_points(np.stack([x, y, z], axis=1)[where], [sensor_x, 0.0, 1.0])
-        return float(m.height_at([[0.05, 0.05]])[0])
-
-    assert seen(np.ones_like(corner), 0.04, 0.0) == pytest.approx(0.04)
-    assert seen(~corner, 0.04, 0.5) == pytest.approx(0.04)  # the floor only: kept
-    assert seen(np.ones_like(corner), 0.0, 1.0) == pytest.approx(0.0)  # the whole: lowered
-    assert seen(corner, 0.06, 1.5) == pytest.approx(0.06)  # a part, higher: raised

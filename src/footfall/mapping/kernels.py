@@ -337,18 +337,12 @@ def fuse(
             parts[i, j] = frame_parts[i, j]
             points[i, j] = frame_n[i, j] if sensor_sigma <= evidence_noise else 0
             continue
-        seen = parts[i, j]
         parts[i, j] |= frame_parts[i, j]
         if new_view and sensor_sigma <= evidence_noise:
             points[i, j] += frame_n[i, j]
         if rule == FUSE_LATEST:
-            # A frame that saw only some of the parts the map has seen of the cell (the rest
-            # beyond the image's edge or behind an edge) may have missed its top: it does not
-            # lower the cell. Noisier points say nothing of parts.
-            partial = (frame_parts[i, j] & seen) != seen and sensor_sigma <= evidence_noise
-            if not (partial and z < heights[i, j]):
-                heights[i, j] = z
-                variance[i, j] = m_var
+            heights[i, j] = z
+            variance[i, j] = m_var
         elif rule == FUSE_MAX:
             if z > heights[i, j]:
                 heights[i, j] = z
