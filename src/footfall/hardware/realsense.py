@@ -118,10 +118,16 @@ class RealSenseStream:
         if recording:
             device.set_status_changed_callback(self._on_status)
         try:
+            # A recording starts reading at its first sensor's start, and a sensor not yet
+            # started loses its frames (the first IMU samples): hold it until all listen.
+            if recording:
+                device.pause()
             for sensor, chosen in profiles:
                 sensor.open(chosen)
                 self._sensors.append(sensor)
                 sensor.start(self._on_frame)
+            if recording:
+                device.resume()
         except RuntimeError as exc:
             self.close()
             raise CameraError(f"{self.name()} would not start: {exc}") from exc
