@@ -10,11 +10,11 @@ from hypothesis import strategies as st
 from footfall.planning.footholds import (
     FootholdConfig,
     FootholdSearch,
-    _eroded,
     point_in_polygon_margin,
     registration_margin_cells,
     sorted_offsets,
 )
+from footfall.planning.regions import steppable_regions
 from footfall.scoring.walkability import ScoreMap
 
 RES = 0.02
@@ -54,12 +54,14 @@ def test_search_returns_the_nearest_acceptable_cell(seed, density, margin, fallb
     centre = np.floor(nominal / RES).astype(int)
     best = None
     lowest = max(least, floor)
+    labels, depth = brute_force_labels(valid), brute_force_depth(valid, margin)
     for m in range(max(margin, lowest), lowest - 1, -1):
-        usable = _eroded(valid, m)
         for i in range(30):
             for j in range(30):
                 d = np.hypot(i - centre[0], j - centre[1])
-                if usable[i, j] and d * RES <= 0.1 + 1e-9:
+                core = depth[labels == labels[i, j]].max()
+                usable = valid[i, j] and depth[i, j] >= max(min(m, max(core, 1)), lowest)
+                if usable and d * RES <= 0.1 + 1e-9:
                     key = (round(d, 9), score[i, j])
                     if best is None or key < best[0]:
                         best = (key, (i, j))
@@ -172,3 +174,103 @@ def test_support_margin_agrees_with_point_in_triangle(p, a, b, c):
     for u, v in ((a, b), (b, c), (c, a)):
         d = abs((v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0])) / np.hypot(*(v - u))
         assert margin <= d + 1e-9
+
+
+def brute_force_depth(valid: np.ndarray, cap: int) -> np.ndarray:
+    """Each cell's margin: the most steps along rows and columns (up to ``cap``) within
+    which every cell is valid and on the grid; -1 for invalid cells."""
+    n, m = valid.shape
+    depth = np.full(valid.shape, -1)
+    for i in range(n):
+        for j in range(m):
+            if not valid[i, j]:
+                continue
+            d = 0
+            while d < cap:
+                ring = [
+                    (i + a, j + b)
+                    for a in range(-d - 1, d + 2)
+                    for b in range(-d - 1, d + 2)
+                    if abs(a) + abs(b) <= d + 1
+                ]
+                if not all(0 <= p < n and 0 <= q < m and valid[p, q] for p, q in ring):
+                    break
+                d += 1
+            depth[i, j] = d
+    return depth
+
+
+def brute_force_labels(valid: np.ndarray) -> np.ndarray:
+    """Regions by flood fill over the eight neighbours; 0 for invalid cells."""
+    labels = np.zeros(valid.shape, dtype=int)
+    count = 0
+    for start in zip(*np.nonzero(valid), strict=True):
+        if labels[start]:
+            continue
+        count += 1
+        stack = [start]
+        labels[start] = count
+        while stack:
+            i, j = stack.pop()
+            for a in (-1, 0, 1):
+                for b in (-1, 0, 1):
+                    p, q = i + a, j + b
+                    inside = 0 <= p < valid.shape[0] and 0 <= q < valid.shape[1]
+                    if inside and valid[p, q] and not labels[p, q]:
+                        labels[p, q] = count
+                        stack.append((p, q))
+    return labels
+
+
+@given(st.integers(0, 2**32 - 1), st.floats(0.0, 1.0), st.integers(0, 4), st.integers(3, 24))
+@settings(max_examples=150, deadline=None)
+def test_regions_and_depths_match_a_brute_force_segmentation(seed, density, cap, size):
+    """Steppable regions are the 8-connected areas of valid cells, each cell's depth the
+    margin of valid cells around it and each region's core its deepest cell, as a flood
+    fill and a cell-by-cell count find them."""
+    rng = np.random.default_rng(seed)
+    valid = rng.uniform(size=(size, size + 3)) < density
+    valid[size // 3 : size // 2, 2:-2] |= density > 0.5  # a wide band: deep cells too
+    regions = steppable_regions(valid, cap)
+    labels = brute_force_labels(valid)
+    assert regions.count == labels.max()
+    # The same partition, whatever the numbering.
+    pairs = set(zip(labels[valid].tolist(), regions.labels[valid].tolist(), strict=True))
+    assert len(pairs) == regions.count
+    assert np.array_equal(regions.labels == 0, ~valid)
+    depth = brute_force_depth(valid, cap)
+    assert np.array_equal(regions.depth, depth)
+    for label in range(1, labels.max() + 1):
+        inside = labels == label
+        (ours,) = set(regions.core()[inside].tolist())
+        assert ours == depth[inside].max()
+
+
+def test_a_small_stone_gives_its_middle_not_its_rim_and_a_replan_keeps_the_stone():
+    """Two stones across a gap, the nominal foothold on the gap: the nearer stone, too
+    small for the full margin, gives its middle cell, not the rim cell nearest the
+    nominal one. Planned before on the farther stone, a re-plan keeps that stone while it
+    has an acceptable cell, and leaves it once it has none."""
+    valid = np.zeros((30, 30), dtype=bool)
+    valid[10:13, 10:20] = True  # a stone three cells wide: its core is one cell deep
+    valid[16:26, 10:20] = True  # a wide stone
+    search = FootholdSearch(FootholdConfig(search_radius=0.12, edge_margin_cells=2), RES)
+    scores = _score_map(valid, np.zeros((30, 30)))
+    heights = np.zeros((30, 30))
+    nominal = (np.array([13.5, 15.5]) + 0.0) * RES  # on the gap, next to the small stone
+    found = search.search(nominal, scores, heights)
+    assert found is not None and found.cell == (11, 15)  # the middle row, not the rim
+    far = (np.array([17.5, 15.5])) * RES
+    kept = search.search(nominal, scores, heights, keep_region_at=far)
+    assert kept is not None and kept.region == search.region_at(far, scores)
+    assert kept.cell[0] >= 16 + 2  # well inside the wide stone
+    assert kept.region != found.region
+
+    def not_the_wide_stone(points: np.ndarray) -> int:
+        rows = np.floor(points[:, 0] / RES)
+        return next((k for k, r in enumerate(rows) if r < 16), -1)
+
+    left = search.search(
+        nominal, scores, heights, first_accepted=not_the_wide_stone, keep_region_at=far
+    )
+    assert left is not None and left.cell == (11, 15)

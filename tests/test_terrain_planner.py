@@ -247,3 +247,37 @@ def test_a_foot_goes_up_a_step_only_from_a_body_that_can_lift_it_over_the_riser(
         elif reached and not all(over_edge):
             refused_for_the_swing += 1
     assert plan.body_z.size and refused_for_the_swing
+
+
+def test_a_replan_keeps_each_foothold_on_its_side_of_a_trench(default_spec):
+    """A trench under the front legs' nominal footholds: planned afresh, each foot goes to
+    the nearer side; re-planned with the foothold planned before on the other side, it
+    stays there (its steppable region still has an acceptable cell) and no jump counts;
+    re-planned from a foothold whose region has no acceptable cell within reach any more,
+    it moves, a forced move that counts as no jump."""
+    spec = default_spec
+    feet = _standing_feet(spec)
+    nominal = feet.copy()
+    nominal[FRONT, 0] += 0.04
+    x = -1.0 + (np.arange(100) + 0.5) * RES
+    heights = np.zeros((100, 100))
+    near_edge = nominal[0, 0] - 0.01
+    heights[(x > near_edge) & (x < near_edge + 0.04)] = -0.1  # the trench
+    heights[(x > 0.7) & (x < 0.8)] = -0.1  # a second trench, far ahead
+    planner = _planner(spec, heights)
+    body = [spec.body_height]
+    fresh = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), body)
+    assert not isinstance(fresh, NoFoothold), fresh
+    sides = fresh.targets[FRONT, 0] > near_edge
+    other = fresh.targets.copy()
+    other[FRONT, 0] = np.where(sides, near_edge - 0.08, near_edge + 0.12)
+    kept = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), body, previous=other)
+    assert not isinstance(kept, NoFoothold), kept
+    assert np.array_equal(kept.targets[FRONT, 0] > near_edge, ~sides)
+    assert planner.region_jumps == 0
+    beyond = fresh.targets.copy()
+    beyond[FRONT, 0] = 0.9  # past the far trench: nothing of that region within reach
+    moved = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), body, previous=beyond)
+    assert not isinstance(moved, NoFoothold), moved
+    np.testing.assert_allclose(moved.targets, fresh.targets)
+    assert planner.region_jumps == 0  # forced: the old region is out of reach

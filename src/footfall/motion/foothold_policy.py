@@ -121,8 +121,12 @@ class FootholdPolicy(Protocol):
         nominal: npt.NDArray[np.float64],
         swing: npt.NDArray[np.bool_],
         search_from: npt.NDArray[np.float64] | None = None,
+        previous: npt.NDArray[np.float64] | None = None,
     ) -> npt.NDArray[np.float64] | NoFoothold:
-        """Targets for the swinging legs, shape (6, 3) [m], or why there are none."""
+        """Targets for the swinging legs, shape (6, 3) [m], or why there are none.
+
+        ``previous``: the targets planned before in this step (a re-plan), or None.
+        """
         ...
 
     def current_targets(
@@ -162,7 +166,7 @@ class BlindFootholds:
         """Flat ground: nothing to clear."""
         return None
 
-    def plan_step(self, context, nominal, swing, search_from=None):  # noqa: D102
+    def plan_step(self, context, nominal, swing, search_from=None, previous=None):  # noqa: D102
         self.plan.nominal = nominal.copy()
         self.plan.targets = nominal.copy()
         return nominal
@@ -208,11 +212,13 @@ class MappedFootholds:
         nominal: npt.NDArray[np.float64],
         swing: npt.NDArray[np.bool_],
         search_from: npt.NDArray[np.float64] | None = None,
+        previous: npt.NDArray[np.float64] | None = None,
     ) -> npt.NDArray[np.float64] | NoFoothold:
         """The planner's footholds, checked against the motion at the step's speed scale.
 
         The planner searches from ``search_from`` when given (the present targets, late in
-        a swing), else from the nominal targets.
+        a swing), else from the nominal targets; a re-plan passes the targets planned
+        before as ``previous``, whose steppable regions the footholds keep where they can.
         """
         c = context
         self.plan.nominal = nominal.copy()
@@ -243,6 +249,7 @@ class MappedFootholds:
             c.feet_in_world,
             poses,
             body_z + c.height_correction,
+            previous,
         )
         self.plan.version = self.planner.version
         if isinstance(plan, NoFoothold):
@@ -276,9 +283,8 @@ class MappedFootholds:
         late = context.now - context.step_start > LATE_SWING * context.step_duration
         if plan.pending_freeze or not (stale or (not late and moved.size and moved.max() > 0.02)):
             return plan.targets, False
-        replanned = self.plan_step(
-            context, nominal, swinging, plan.targets.copy() if late else None
-        )
+        before = plan.targets.copy()
+        replanned = self.plan_step(context, nominal, swinging, before if late else None, before)
         if isinstance(replanned, NoFoothold):
             plan.pending_freeze = replanned
             for leg, start in swing_starts.items():

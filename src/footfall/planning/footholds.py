@@ -22,6 +22,7 @@ import numpy.typing as npt
 
 from footfall.checks import require_non_negative
 from footfall.errors import ConfigError
+from footfall.planning.regions import Regions, steppable_regions
 from footfall.scoring.walkability import ScoreMap
 
 # The widest search, in cells of the map searched.
@@ -128,21 +129,6 @@ def registration_margin_cells(error_m: float, resolution: float) -> int:
     return min(math.ceil(error_m / resolution - 0.5 - 1e-9), MAX_SEARCH_CELLS)
 
 
-def _eroded(valid: npt.NDArray[np.bool_], cells: int) -> npt.NDArray[np.bool_]:
-    """Cells whose whole (2 cells + 1) square neighbourhood is valid (off-map counts invalid)."""
-    out = valid.copy()
-    for _ in range(cells):
-        grown = out.copy()
-        grown[1:, :] &= out[:-1, :]
-        grown[:-1, :] &= out[1:, :]
-        grown[:, 1:] &= out[:, :-1]
-        grown[:, :-1] &= out[:, 1:]
-        grown[[0, -1], :] = False
-        grown[:, [0, -1]] = False
-        out = grown
-    return out
-
-
 # Candidates tested at once, nearest first; the last size repeats to the end.
 _CHUNKS = (1, 8, 32, *([128] * 64))
 
@@ -157,12 +143,15 @@ class Foothold:
         cell: Index ``[i, j]`` in the score map.
         moved: Distance from the nominal position [m].
         score: The cell's score.
+        region: The steppable region the cell lies in (its label in the score map's
+            :class:`~footfall.planning.regions.Regions`).
     """
 
     position: npt.NDArray[np.float64]
     cell: tuple[int, int]
     moved: float
     score: float
+    region: int = 0
 
 
 class FootholdSearch:
@@ -184,7 +173,7 @@ class FootholdSearch:
         self.resolution = resolution
         self.offsets, self.distances = sorted_offsets(config.search_radius / resolution)
         self._cache_key: ScoreMap | None = None
-        self._cache: dict[int, npt.NDArray[np.bool_]] = {}
+        self._cache: Regions | None = None
 
     def search(
         self,
@@ -194,12 +183,20 @@ class FootholdSearch:
         accept: Callable[[npt.NDArray[np.float64]], bool] | None = None,
         first_accepted: Callable[[npt.NDArray[np.float64]], int] | None = None,
         min_margin_cells: int = 0,
+        keep_region_at: npt.ArrayLike | None = None,
     ) -> Foothold | None:
-        """The nearest acceptable cell to a nominal foot position.
+        """The nearest acceptable cell to a nominal foot position, well inside its region.
 
-        Cells with the full edge margin are searched first; the narrower margins only when
-        none of those passes, down to the configured least margin or ``min_margin_cells``,
-        whichever is wider (a map that may lie off where the feet think it is).
+        Cells with the full edge margin are searched first, or, in a steppable region too
+        small for it, the region's core (its deepest cells: a small stone's middle, not its
+        rim) where that is at least a cell deep (a strip or a speck of valid cells is no
+        place to aim for); the narrower margins only when none of those passes, down to
+        the configured least margin or ``min_margin_cells``, whichever is wider (a map that
+        may lie off where the feet think it is). With ``keep_region_at`` (the foothold
+        planned before), candidates in that point's region come first at each margin: a
+        re-plan keeps the region while it has an acceptable cell as far inside as any
+        other region offers, rather than flipping to another side of an edge that happens
+        to be a cell nearer.
 
         Args:
             nominal_xy: Nominal foot position in the world, shape (2,) [m].
@@ -211,6 +208,7 @@ class FootholdSearch:
                 ground points in search order, shape (m, 3), the index of the first that
                 passes, or -1. Used instead of ``accept`` when given.
             min_margin_cells: The least edge margin this search accepts [cells].
+            keep_region_at: World point (x, y) whose region to prefer [m]; None for none.
 
         Returns:
             The foothold, or None when no cell within the radius passes.
@@ -234,12 +232,19 @@ class FootholdSearch:
                 return next((k for k, p in enumerate(points) if accept(p)), -1)
 
         least = max(self.config.min_edge_margin_cells, int(min_margin_cells))
+        regions = self.regions(scores)
+        depth = regions.depth[cells[:, 0], cells[:, 1]]
+        label = regions.labels[cells[:, 0], cells[:, 1]]
+        core = regions.core_by_label[label]
+        kept = self.region_at(keep_region_at, scores) if keep_region_at is not None else 0
+        elsewhere = label != kept if kept else np.zeros(len(cells), dtype=bool)
         for margin in range(max(self.config.edge_margin_cells, least), least - 1, -1):
-            ok = self._eroded(scores, margin)[cells[:, 0], cells[:, 1]] & ~tried
+            ok = (depth >= np.maximum(np.minimum(margin, np.maximum(core, 1)), least)) & ~tried
             tried |= ok
             candidates, candidate_distances = cells[ok], distances[ok]
             cell_scores = scores.score[candidates[:, 0], candidates[:, 1]]
-            order = np.lexsort((cell_scores, np.round(candidate_distances, 9)))  # distance, score
+            # The kept region first, then distance, then score.
+            order = np.lexsort((cell_scores, np.round(candidate_distances, 9), elsewhere[ok]))
             ordered = candidates[order]
             # The nominal cell keeps the nominal position (no adjustment); others their centre.
             xy = origin + (ordered + 0.5) * res
@@ -254,14 +259,68 @@ class FootholdSearch:
                     k += start
                     i, j = (int(v) for v in ordered[k])
                     moved = float(np.hypot(*(xy[k] - nominal)))
-                    return Foothold(points[k], (i, j), moved, float(cell_scores[order[k]]))
+                    score = float(cell_scores[order[k]])
+                    return Foothold(points[k], (i, j), moved, score, int(regions.labels[i, j]))
                 start += size
         return None
 
-    def _eroded(self, scores: ScoreMap, margin: int) -> npt.NDArray[np.bool_]:
-        """Valid cells with ``margin`` valid cells around them, cached per score map."""
-        if self._cache_key is not scores:
-            self._cache_key, self._cache = scores, {}
-        if margin not in self._cache:
-            self._cache[margin] = _eroded(scores.valid, margin)
-        return self._cache[margin]
+    def regions(self, scores: ScoreMap) -> Regions:
+        """The score map's steppable regions, depths up to the full margin; cached per map."""
+        if self._cache_key is not scores or self._cache is None:
+            self._cache_key = scores
+            self._cache = steppable_regions(scores.valid, self.config.edge_margin_cells)
+        return self._cache
+
+    def level(self, regions: Regions, cell: tuple[int, int], least: int = 0) -> int:
+        """The widest margin at which :meth:`search` takes a cell; -1 where it never does.
+
+        A cell at its region's core (at least a cell deep) or at the full margin counts as
+        the full margin; a shallower one as its depth; one shallower than ``least``, never.
+        """
+        depth = int(regions.depth[cell])
+        if depth < max(least, 0):
+            return -1
+        core = int(regions.core_by_label[regions.labels[cell]])
+        return max(self.config.edge_margin_cells, least) if depth >= max(core, 1) else depth
+
+    def needless_jump(
+        self,
+        kept_xy: npt.ArrayLike,
+        foothold: Foothold,
+        scores: ScoreMap,
+        heights: npt.NDArray[np.float64],
+        least_margin: int,
+        first_accepted: Callable[[npt.NDArray[np.float64]], int],
+    ) -> bool:
+        """Whether a foothold left the region of the one planned before needlessly.
+
+        Needlessly: the one before (at ``kept_xy``) still served, valid and passing
+        ``first_accepted``, and the new one lies no farther inside its region than the
+        search asks (:meth:`level`).
+        """
+        cell = self.cell_at(kept_xy, scores)
+        if cell is None:
+            return False
+        regions = self.regions(scores)
+        had = int(regions.labels[cell])
+        if not had or had == foothold.region:
+            return False
+        before = self.level(regions, cell, least_margin)
+        if before < 0 or self.level(regions, foothold.cell, least_margin) > before:
+            return False
+        x, y = np.asarray(kept_xy, dtype=np.float64)[:2]
+        return first_accepted(np.array([[x, y, heights[cell]]])) == 0
+
+    def cell_at(self, xy: npt.ArrayLike, scores: ScoreMap) -> tuple[int, int] | None:
+        """The score map's cell under a world point (x, y) [m]; None off the map."""
+        cell = np.floor((np.asarray(xy, dtype=np.float64)[:2] - scores.origin) / scores.resolution)
+        if not np.all(np.isfinite(cell)):
+            return None
+        i, j = (int(v) for v in cell)
+        n_i, n_j = scores.valid.shape
+        return (i, j) if 0 <= i < n_i and 0 <= j < n_j else None
+
+    def region_at(self, xy: npt.ArrayLike, scores: ScoreMap) -> int:
+        """The region a world point (x, y) lies in on the score map; 0 for none [m]."""
+        cell = self.cell_at(xy, scores)
+        return 0 if cell is None else int(self.regions(scores).labels[cell])

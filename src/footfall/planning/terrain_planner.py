@@ -145,6 +145,9 @@ class TerrainPlanner:
             cell mapped seconds ago moved with the estimate of that time. Footholds keep at
             least this far from invalid cells (:func:`registration_margin_cells`); the
             walking controller sets it from its pose corrections.
+        region_jumps: Re-plans that moved a leg's foothold to another steppable region,
+            no farther inside it, while the foothold planned before still served (valid,
+            reached and stable): flips across an edge, which the search should never make.
     """
 
     def __init__(self, spec: HexapodSpec, config: TerrainPlannerConfig | None = None) -> None:
@@ -155,6 +158,7 @@ class TerrainPlanner:
         self.scores: ScoreMap | None = None
         self.version = 0
         self.registration_error_m = 0.0
+        self.region_jumps = 0
         self._search: FootholdSearch | None = None
 
     def update(self, snapshot: MapSnapshot, scores: ScoreMap) -> None:
@@ -194,6 +198,7 @@ class TerrainPlanner:
         feet: npt.NDArray[np.float64],
         poses: StepPoses,
         body_z: npt.ArrayLike,
+        previous: npt.NDArray[np.float64] | None = None,
     ) -> FootholdPlan | NoFoothold:
         """Move each swinging leg's nominal foothold to the nearest acceptable cell.
 
@@ -210,6 +215,10 @@ class TerrainPlanner:
             poses: Body poses the footholds are checked at.
             body_z: Candidate body heights in the world [m]: those the body can reach by
                 touchdown.
+            previous: The targets planned before in this step, shape (6, 3) [m], or None:
+                each leg keeps its foothold's steppable region while that still has an
+                acceptable cell (a needless move to another region counts in
+                :attr:`region_jumps`).
 
         Returns:
             The plan, or why there is none (naming the leg).
@@ -284,6 +293,7 @@ class TerrainPlanner:
             # The body hardly travelling this step (a turn on the spot), a leg with nowhere
             # to go near its nominal foothold may step where it stands.
             origins = (nominal[leg, :2], feet[leg, :2]) if in_place else (nominal[leg, :2],)
+            kept = None if previous is None else previous[leg, :2]
             foothold = None
             for origin in origins:
                 foothold = self._search.search(
@@ -292,6 +302,7 @@ class TerrainPlanner:
                     self.snapshot.heights,
                     first_accepted=first_accepted,
                     min_margin_cells=least_margin,
+                    keep_region_at=kept,
                 )
                 if foothold is not None:
                     break
@@ -307,6 +318,10 @@ class TerrainPlanner:
                     f"{drift} within {c.footholds.search_radius:.2f} m of its nominal foothold "
                     f"({nominal[leg, 0]:.2f}, {nominal[leg, 1]:.2f}) m",
                     self.spec.leg_names[leg],
+                )
+            if kept is not None:
+                self.region_jumps += self._search.needless_jump(
+                    kept, foothold, self.scores, self.snapshot.heights, least_margin, first_accepted
                 )
             targets[leg] = foothold.position + [0.0, 0.0, r]
             feasible = feasible & reached_at(targets[leg][None])[0]

@@ -388,6 +388,7 @@ class WalkingRobot:
         """Freezes, stale stops, pose corrections and jumps, and what injected faults did."""
         frozen = GaitState.FROZEN.value
         registration = self.graph.movement.controller.registration
+        planner = self.graph.movement.controller.planner
         return Robustness(
             freezes=sum(b == frozen and a != frozen for a, b in itertools.pairwise(log.state)),
             stale_stops=self.graph.movement.stops,
@@ -395,4 +396,5 @@ class WalkingRobot:
             pose_jumps_detected=None if self.guard is None else self.guard.jumps,
             pose_jumps_refuted=None if self.guard is None else self.guard.refuted,
             faults=None if self.link is None else dataclasses.asdict(self.link.counts),
+            foothold_region_jumps=None if planner is None else planner.region_jumps,
         )

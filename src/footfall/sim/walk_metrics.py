@@ -112,6 +112,9 @@ class Robustness:
         pose_jumps_detected: Pose estimates the guard took for jumps (planned walking).
         pose_jumps_refuted: Of those, ones the map showed were right.
         faults: What the injected faults did, by kind (faults asked for).
+        foothold_region_jumps: Re-plans that moved a leg's foothold to another steppable
+            region, no deeper inside it, while the foothold planned before still served
+            (planned walking).
     """
 
     freezes: int
@@ -120,6 +123,7 @@ class Robustness:
     pose_jumps_detected: int | None = None
     pose_jumps_refuted: int | None = None
     faults: dict[str, int] | None = None
+    foothold_region_jumps: int | None = None
 
 
 @dataclass(frozen=True)
