@@ -138,7 +138,7 @@ def test_cells_straddling_an_edge_are_found_but_not_a_ramp():
     assert edge[10].all() and edge.sum() == 20
 
 
-def test_an_edge_cell_and_its_neighbours_are_invalid_and_scored_at_the_top():
+def test_an_edge_cell_and_its_neighbours_are_invalid_and_scored_at_the_top_too():
     """A cell straddling a stone's edge whose height shows the groove side: it and its eight
     neighbours are invalid, and the floor two cells off scores the stone's edge."""
     heights = np.zeros((30, 30))
@@ -153,6 +153,37 @@ def test_an_edge_cell_and_its_neighbours_are_invalid_and_scored_at_the_top():
     _, _, plain, _ = score_heights(heights, 0.02, CONFIG)
     assert scores.score[15, 13] > plain[15, 13] + 0.1
     assert scores.valid[15, 5] and scores.valid[15, 25]
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(8, 21), st.floats(0.01, 0.3), st.booleans(), st.booleans())
+def test_an_edge_cell_keeps_feet_off_both_its_levels_whichever_it_shows(
+    column, rise_m, shows_top, groove
+):
+    """A cell straddling a stone's edge holds the stone's rim and the floor below it:
+    whichever of the two its height shows, no cell is valid that would not be valid with
+    the edge at either side of the cell (the floor's last cell or the stone's first), and
+    the cell and its neighbours are invalid. With ``groove`` the floor is one cell wide:
+    only the edge cell sees it."""
+    n = 30
+    true = np.zeros((n, n))
+    true[:, column + 1 :] = rise_m
+    if groove:
+        true[:, :column] = rise_m
+    heights = true.copy()
+    heights[:, column] = rise_m if shows_top else 0.0
+    spread = np.zeros((n, n))
+    spread[:, column] = rise_m
+    valid = score_map(_snapshot(heights, spread)).valid
+    floor_there, stone_there = true.copy(), true.copy()
+    floor_there[:, column] = 0.0
+    stone_there[:, column] = rise_m
+    either = (
+        score_heights(floor_there, 0.02, CONFIG)[3] & score_heights(stone_there, 0.02, CONFIG)[3]
+    )
+    rows = slice(5, n - 5)
+    assert not (valid[rows] & ~either[rows]).any()
+    assert not valid[rows, column - 1 : column + 2].any()
 
 
 def test_a_well_seen_cell_with_a_part_never_hit_is_shadowed_with_the_neighbour_behind():
@@ -189,7 +220,8 @@ def test_the_sliver_of_a_rim_before_a_shadow_is_unseen_and_the_edge_band_stands_
     as unseen, so every cell within the kernel's half-width of the true edge is invalid, as
     a perfect map would have it. A fully seen cell, a cell with the floor seen beyond it,
     one whose rim behind is barely seen, or one before a shadow shorter than
-    ``shadow_rim_cells`` (a groove between stones), is left as it is."""
+    ``shadow_rim_cells`` (a groove between stones) unless the ground seen past it lies
+    ``shadow_rim_drop`` below (a deep gap's floor), is left as it is."""
     config = ScoreConfig()
     n, edge, half = 20, 10, config.kernel_size // 2
     index = np.arange(n)[:, None] * np.ones((1, n), int)  # cell index along the way
@@ -221,3 +253,11 @@ def test_the_sliver_of_a_rim_before_a_shadow_is_unseen_and_the_edge_band_stands_
     assert np.array_equal(shadow_rims(parts, points, long_enough, config), sliver)
     short = known | (along >= edge + run)
     assert not shadow_rims(parts, points, short, config).any()
+    # A shadow one cell long, then the floor of a deep gap seen through the opening: the
+    # sliver is the gap's rim; a floor seen only a little lower is a groove's, left alone.
+    through = known | (along >= edge + 2)
+    for floor_m, is_rim in ((-0.3, True), (-0.6 * config.shadow_rim_drop, False)):
+        floor = np.where(along >= edge + 2, floor_m, heights)
+        found = shadow_rims(parts, points, through, config, floor)
+        assert np.array_equal(found, sliver if is_rim else np.zeros_like(sliver))
+    assert not shadow_rims(parts, points, through, config).any()  # heights unknown: as before

@@ -64,6 +64,9 @@ class ScoreConfig:
             from above at 45 degrees or lower, a drop casts a shadow at least as long as it
             is deep; a shorter shadow hides a shallow drop (a groove between cobblestones),
             whose one-cell edge band the scorer already keeps, or a gap narrower than it.
+        shadow_rim_drop: Past a shadow's first cell, ground seen this far or more below the
+            rim counts as the shadow's: a drop that deep (a gap's floor seen through the
+            opening) needs its band where the true edge is [m].
     """
 
     slope_weight: float = 1.0
@@ -75,11 +78,17 @@ class ScoreConfig:
     noise_sigmas: float = 2.5
     shadow_points: int = 48
     shadow_rim_cells: int = 3
+    shadow_rim_drop: float = 0.05
 
     def __post_init__(self) -> None:
         if self.kernel_size < 3 or self.kernel_size % 2 == 0:
             raise ConfigError(f"kernel_size must be odd and >= 3, got {self.kernel_size}")
-        require_positive("score", kernel_sigma=self.kernel_sigma, threshold=self.threshold)
+        require_positive(
+            "score",
+            kernel_sigma=self.kernel_sigma,
+            threshold=self.threshold,
+            shadow_rim_drop=self.shadow_rim_drop,
+        )
         require_non_negative(
             "score", slope_weight=self.slope_weight, proximity_weight=self.proximity_weight
         )
@@ -241,7 +250,11 @@ def _side_bits(side: str) -> npt.NDArray[np.int64]:
 
 
 def shadow_rims(
-    parts: npt.ArrayLike, points: npt.ArrayLike, known: npt.ArrayLike, config: ScoreConfig
+    parts: npt.ArrayLike,
+    points: npt.ArrayLike,
+    known: npt.ArrayLike,
+    config: ScoreConfig,
+    heights: npt.ArrayLike | None = None,
 ) -> npt.NDArray[np.bool_]:
     """Slivers of a rim at the edge of a shadow: cells to score as unseen.
 
@@ -251,8 +264,10 @@ def shadow_rims(
     Such a cell is known and well seen on one side (the neighbour there has caught at least
     ``shadow_points``), yet half or more of its parts along the opposite side were never
     hit and at least ``shadow_rim_cells`` cells across that side are unknown (beyond the
-    window counts as unknown). Scored as unknown, it keeps the kernel's band of invalid
-    cells where the true edge puts it.
+    window counts as unknown). Given the ``heights``, the cells past the first may instead
+    lie ``shadow_rim_drop`` or more below the rim: the floor of a deep gap, seen again
+    through the opening past a shadow too short for the rule alone. Scored as unknown, the
+    sliver keeps the kernel's band of invalid cells where the true edge puts it.
     """
     bits = np.asarray(parts, dtype=np.uint16)
     seen = np.asarray(known, dtype=bool)
@@ -266,10 +281,16 @@ def shadow_rims(
         return seen & (never_hit >= (SUB + 1) // 2)
 
     out = np.zeros(seen.shape, dtype=bool)
+    if heights is not None:
+        h = np.where(seen, np.asarray(heights, dtype=np.float64), np.inf)
+        deep_below = np.where(seen, h - config.shadow_rim_drop, -np.inf)
     for side in opposite:  # open on +x: a shadow beyond along +x, well seen behind; ...
-        shadow = np.logical_and.reduce(
-            [_across(~seen, side, d, True) for d in range(1, config.shadow_rim_cells + 1)]
-        )
+        shadow = _across(~seen, side, 1, True)
+        for d in range(2, config.shadow_rim_cells + 1):
+            dark = _across(~seen, side, d, True)
+            if heights is not None:
+                dark |= _across(h, side, d, np.inf) <= deep_below
+            shadow &= dark
         out |= open_side(side) & shadow & _across(well_seen, opposite[side], 1, False)
     return out
 
@@ -298,9 +319,12 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
     """Score a height-map snapshot.
 
     A cell that straddles an edge (:func:`edge_cells`) is invalid, and so are its eight
-    neighbours: the edge may lie anywhere in it. Its height shows whichever side of the
-    edge the last frame saw, so it is scored at the higher side (the highest of its
-    neighbours): a foot nearby keeps its distance from the top of the edge. A cell partly
+    neighbours: the edge may lie anywhere in it. It holds two levels (a stone's rim and the
+    gap's floor, the face between them) and its one height shows whichever the last frame
+    saw; so the map is scored twice, once with the cell at its top (the highest of its
+    neighbours) and once at its bottom (its height less its spread, or its lowest
+    neighbour if lower), and a cell is valid only if valid in both, scoring the worse: a
+    foot nearby keeps its distance from both sides of the edge. A cell partly
     in a shadow (:func:`shadowed_cells`) is invalid too, and the sliver of a rim at a
     shadow's edge (:func:`shadow_rims`) is scored as unseen.
     """
@@ -308,7 +332,7 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
     sigma = None if snapshot.variance is None else np.sqrt(snapshot.variance)
     heights = snapshot.heights
     if snapshot.parts is not None and snapshot.points is not None:
-        rims = shadow_rims(snapshot.parts, snapshot.points, np.isfinite(heights), c)
+        rims = shadow_rims(snapshot.parts, snapshot.points, np.isfinite(heights), c, heights)
         if rims.any():
             heights = np.where(rims, np.nan, heights)
     slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c, sigma)
@@ -316,11 +340,19 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
         return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)
     edge = edge_cells(snapshot.spread, slope, snapshot.resolution, c)
     if edge.any():
-        heights = heights.copy()
         top = _around(np.nan_to_num(heights, nan=-np.inf), np.maximum)
-        heights[edge] = top[edge]
-        slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c, sigma)
-        valid &= ~_around(edge, np.logical_or)
+        bottom = np.minimum(
+            _around(np.nan_to_num(heights, nan=np.inf), np.minimum),
+            heights - np.nan_to_num(snapshot.spread, nan=0.0),
+        )
+        slope, proximity, score, valid = score_heights(
+            np.where(edge, top, heights), snapshot.resolution, c, sigma
+        )
+        low = score_heights(np.where(edge, bottom, heights), snapshot.resolution, c, sigma)
+        slope, proximity, score = (
+            np.fmax(a, b) for a, b in zip((slope, proximity, score), low[:3], strict=True)
+        )
+        valid &= low[3] & ~_around(edge, np.logical_or)
     if snapshot.parts is not None and snapshot.points is not None:
         valid &= ~shadowed_cells(snapshot.parts, snapshot.points, c)
     return ScoreMap(slope, proximity, score, valid, snapshot.origin, snapshot.resolution)
