@@ -221,7 +221,7 @@ def test_bench_terrain_writes_its_table_and_chart(tmp_path, monkeypatch, capsys)
     assert [(r["terrain"], r["mode"]) for r in serial["results"]] == [
         (t, m) for t in ("stairs", "dead_end") for m in ("planned", "straight", "blind")
     ]
-    assert all(r["runs"] == 1 for r in serial["results"])
+    assert all(r["runs"] == 1 and r["foothold_region_jumps"] >= 0 for r in serial["results"])
     assert {"planned_success_rate", "straight_success_rate", "blind_success_rate"} <= serial.keys()
     for a, b in zip(serial["results"], parallel["results"], strict=True):
         assert {k: v for k, v in a.items() if k != "wall_seconds"} == {

@@ -83,6 +83,7 @@ def _walk(job: Job) -> dict[str, object]:
         "fell": m.fell,
         "invalid_footholds": invalid,
         "frozen": m.outcome.frozen,
+        "foothold_region_jumps": m.robustness.foothold_region_jumps or 0,
         "recovered": reached and (stopped + caught) > 0,
         "wall_seconds": m.gait.wall_seconds,
     }

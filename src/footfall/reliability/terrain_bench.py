@@ -120,6 +120,7 @@ def _terrain_run(job: Job) -> dict[str, object]:
         "fell": m.fell,
         "invalid_footholds": invalid,
         "frozen": m.outcome.frozen,
+        "foothold_region_jumps": m.robustness.foothold_region_jumps or 0,
         "no_route": no_route,
         "reason": reason,
         "tilt_max_deg": m.gait.tilt_max_deg,

@@ -182,8 +182,9 @@ def tally(outcomes: Sequence[dict], seeds: Sequence[int]) -> dict[str, object]:
     """What a results row counts over its walks, one walk per seed.
 
     Returns:
-        ``runs``, ``successes``, ``falls``, ``invalid_footholds``, ``frozen`` and the
-        ``failed_seeds``.
+        ``runs``, ``successes``, ``falls``, ``invalid_footholds``, ``frozen``,
+        ``foothold_region_jumps`` (re-plans that moved a foot to another steppable region
+        needlessly) and the ``failed_seeds``.
     """
     return {
         "runs": len(outcomes),
@@ -191,5 +192,6 @@ def tally(outcomes: Sequence[dict], seeds: Sequence[int]) -> dict[str, object]:
         "falls": sum(bool(o["fell"]) for o in outcomes),
         "invalid_footholds": sum(int(o["invalid_footholds"]) for o in outcomes),
         "frozen": sum(bool(o["frozen"]) for o in outcomes),
+        "foothold_region_jumps": sum(int(o["foothold_region_jumps"]) for o in outcomes),
         "failed_seeds": [s for s, o in zip(seeds, outcomes, strict=True) if not o["success"]],
     }
