@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -31,14 +33,19 @@ def _score_map(valid: np.ndarray, score: np.ndarray) -> ScoreMap:
     st.integers(0, 2),
     st.integers(0, 2),
     st.integers(0, 3),
+    st.booleans(),
+    st.sampled_from([0.0, 0.02, 0.05]),
 )
 @settings(max_examples=150, deadline=None)
-def test_search_returns_the_nearest_acceptable_cell(seed, density, margin, fallback, floor):
+def test_search_returns_the_nearest_acceptable_cell(
+    seed, density, margin, fallback, floor, keep, hysteresis
+):
     """Cross-check against brute force: the nearest valid cell with the full edge margin
     within the radius, ties by score, else the nearest with the next narrower margin, never
     narrower than the search's least margin (``min_margin_cells``, the map's possible
-    misregistration) and wider first when that is wider; never an invalid or unknown cell;
-    None when there is none."""
+    misregistration) and wider first when that is wider; cells in the region of a kept
+    point count as the hysteresis nearer; never an invalid or unknown cell; None when
+    there is none."""
     rng = np.random.default_rng(seed)
     valid = rng.uniform(size=(30, 30)) < density
     score = rng.uniform(0, 0.5, (30, 30))
@@ -46,15 +53,22 @@ def test_search_returns_the_nearest_acceptable_cell(seed, density, margin, fallb
     heights[~valid & (rng.uniform(size=valid.shape) < 0.5)] = np.nan  # some unknown cells
     least = max(margin - fallback, 0)
     config = FootholdConfig(
-        search_radius=0.1, edge_margin_cells=margin, min_edge_margin_cells=least
+        search_radius=0.1,
+        edge_margin_cells=margin,
+        min_edge_margin_cells=least,
+        region_hysteresis=hysteresis,
     )
     search = FootholdSearch(config, RES)
     nominal = rng.uniform(0.1, 0.5, 2)
-    found = search.search(nominal, _score_map(valid, score), heights, min_margin_cells=floor)
+    kept = rng.uniform(0.0, 0.6, 2) if keep else None
+    found = search.search(
+        nominal, _score_map(valid, score), heights, min_margin_cells=floor, keep_region_at=kept
+    )
     centre = np.floor(nominal / RES).astype(int)
     best = None
     lowest = max(least, floor)
     labels, depth = brute_force_labels(valid), brute_force_depth(valid, margin)
+    kept_label = 0 if kept is None else labels[tuple(np.floor(kept / RES).astype(int))]
     for m in range(max(margin, lowest), lowest - 1, -1):
         for i in range(30):
             for j in range(30):
@@ -62,7 +76,8 @@ def test_search_returns_the_nearest_acceptable_cell(seed, density, margin, fallb
                 core = depth[labels == labels[i, j]].max()
                 usable = valid[i, j] and depth[i, j] >= max(min(m, max(core, 1)), lowest)
                 if usable and d * RES <= 0.1 + 1e-9:
-                    key = (round(d, 9), score[i, j])
+                    ranked = d - hysteresis / RES * (kept_label and labels[i, j] == kept_label)
+                    key = (round(ranked, 9), score[i, j])
                     if best is None or key < best[0]:
                         best = (key, (i, j))
         if best is not None:
@@ -250,20 +265,22 @@ def test_a_small_stone_gives_its_middle_not_its_rim_and_a_replan_keeps_the_stone
     """Two stones across a gap, the nominal foothold on the gap: the nearer stone, too
     small for the full margin, gives its middle cell, not the rim cell nearest the
     nominal one. Planned before on the farther stone, a re-plan keeps that stone while it
-    has an acceptable cell, and leaves it once it has none."""
+    has an acceptable cell less than the hysteresis farther than the other stone's, and
+    leaves it once it has none, or once the nominal foothold moved well away from it."""
     valid = np.zeros((30, 30), dtype=bool)
     valid[10:13, 10:20] = True  # a stone three cells wide: its core is one cell deep
     valid[16:26, 10:20] = True  # a wide stone
-    search = FootholdSearch(FootholdConfig(search_radius=0.12, edge_margin_cells=2), RES)
+    config = FootholdConfig(search_radius=0.12, edge_margin_cells=2, region_hysteresis=0.04)
+    search = FootholdSearch(config, RES)
     scores = _score_map(valid, np.zeros((30, 30)))
     heights = np.zeros((30, 30))
-    nominal = (np.array([13.5, 15.5]) + 0.0) * RES  # on the gap, next to the small stone
+    nominal = np.array([14.5, 15.5]) * RES  # on the gap: 3 cells from the small stone's middle
     found = search.search(nominal, scores, heights)
     assert found is not None and found.cell == (11, 15)  # the middle row, not the rim
-    far = (np.array([17.5, 15.5])) * RES
+    far = (np.array([19.5, 15.5])) * RES
     kept = search.search(nominal, scores, heights, keep_region_at=far)
     assert kept is not None and kept.region == search.region_at(far, scores)
-    assert kept.cell[0] >= 16 + 2  # well inside the wide stone
+    assert kept.cell == (18, 15)  # well inside the wide stone, 4 cells off: within 2 of 3
     assert kept.region != found.region
 
     def not_the_wide_stone(points: np.ndarray) -> int:
@@ -274,3 +291,22 @@ def test_a_small_stone_gives_its_middle_not_its_rim_and_a_replan_keeps_the_stone
         nominal, scores, heights, first_accepted=not_the_wide_stone, keep_region_at=far
     )
     assert left is not None and left.cell == (11, 15)
+    moved = np.array([12.5, 15.5]) * RES  # the nominal foothold moved onto the small stone
+    away = search.search(moved, scores, heights, keep_region_at=far)
+    assert away is not None and away.cell == (11, 15)  # 1 cell against 6: the stone is left
+
+    def any_point(points: np.ndarray) -> int:
+        return 0 if len(points) else -1
+
+    # Leaving the wide stone for a cell 1 cell nearer is needless; 2 cells (4 cm), not;
+    # from a foothold beyond the search radius (0.12 m, 6 cells), not, however near.
+    aside = dataclasses.replace(found, cell=(11, 11))  # the small stone's core, 5 cells off
+    for kept_cell, new, needless in (
+        ((18, 15), found, True),
+        ((19, 15), found, False),
+        ((18, 16), aside, True),  # 4.1 cells off: nearer than the new one
+        ((20, 17), aside, False),  # 6.3 cells off: beyond the radius
+    ):
+        kept_xy = (np.array(kept_cell) + 0.5) * RES
+        jumped = search.needless_jump(nominal, kept_xy, new, scores, heights, 0, any_point)
+        assert jumped is needless, kept_cell

@@ -43,16 +43,24 @@ class FootholdConfig:
         min_edge_margin_cells: Where no candidate within the radius has the full margin
             (stones smaller than the margin leaves room on), the margin shrinks one cell at
             a time down to this.
+        region_hysteresis: A re-planned foothold leaves the region of the one planned
+            before only for a cell at least this much nearer its nominal position [m]: an
+            edge that came a cell nearer does not flip the foot across it, and a foot whose
+            nominal position moved well away is not held on a small region's rim.
     """
 
     search_radius: float = 0.16
     stability_margin: float = 0.02
     edge_margin_cells: int = 2
     min_edge_margin_cells: int = 0
+    region_hysteresis: float = 0.04
 
     def __post_init__(self) -> None:
         require_non_negative(
-            "foothold", search_radius=self.search_radius, stability_margin=self.stability_margin
+            "foothold",
+            search_radius=self.search_radius,
+            stability_margin=self.stability_margin,
+            region_hysteresis=self.region_hysteresis,
         )
         if not 0 <= self.min_edge_margin_cells <= self.edge_margin_cells:
             raise ConfigError("edge margins need 0 <= min_edge_margin_cells <= edge_margin_cells")
@@ -172,6 +180,7 @@ class FootholdSearch:
         self.config = config
         self.resolution = resolution
         self.offsets, self.distances = sorted_offsets(config.search_radius / resolution)
+        self.radius_cells = float(self.distances[-1])
         self._cache_key: ScoreMap | None = None
         self._cache: Regions | None = None
 
@@ -193,10 +202,10 @@ class FootholdSearch:
         place to aim for); the narrower margins only when none of those passes, down to
         the configured least margin or ``min_margin_cells``, whichever is wider (a map that
         may lie off where the feet think it is). With ``keep_region_at`` (the foothold
-        planned before), candidates in that point's region come first at each margin: a
-        re-plan keeps the region while it has an acceptable cell as far inside as any
-        other region offers, rather than flipping to another side of an edge that happens
-        to be a cell nearer.
+        planned before), candidates in that point's region count as ``region_hysteresis``
+        nearer at each margin: a re-plan keeps the region while it has an acceptable cell
+        as far inside as any other region offers and not that much farther away, rather
+        than flipping to another side of an edge that happens to be a cell nearer.
 
         Args:
             nominal_xy: Nominal foot position in the world, shape (2,) [m].
@@ -237,14 +246,15 @@ class FootholdSearch:
         label = regions.labels[cells[:, 0], cells[:, 1]]
         core = regions.core_by_label[label]
         kept = self.region_at(keep_region_at, scores) if keep_region_at is not None else 0
-        elsewhere = label != kept if kept else np.zeros(len(cells), dtype=bool)
+        # Distances with the kept region's hysteresis taken off [cells].
+        ranked = distances - (self.config.region_hysteresis / res) * (kept and label == kept)
         for margin in range(max(self.config.edge_margin_cells, least), least - 1, -1):
             ok = (depth >= np.maximum(np.minimum(margin, np.maximum(core, 1)), least)) & ~tried
             tried |= ok
-            candidates, candidate_distances = cells[ok], distances[ok]
+            candidates = cells[ok]
             cell_scores = scores.score[candidates[:, 0], candidates[:, 1]]
-            # The kept region first, then distance, then score.
-            order = np.lexsort((cell_scores, np.round(candidate_distances, 9), elsewhere[ok]))
+            # Distance (the kept region's less its hysteresis), then score.
+            order = np.lexsort((cell_scores, np.round(ranked[ok], 9)))
             ordered = candidates[order]
             # The nominal cell keeps the nominal position (no adjustment); others their centre.
             xy = origin + (ordered + 0.5) * res
@@ -285,6 +295,7 @@ class FootholdSearch:
 
     def needless_jump(
         self,
+        origin_xy: npt.ArrayLike,
         kept_xy: npt.ArrayLike,
         foothold: Foothold,
         scores: ScoreMap,
@@ -296,10 +307,13 @@ class FootholdSearch:
 
         Needlessly: the one before (at ``kept_xy``) still served, valid and passing
         ``first_accepted``, and the new one lies no farther inside its region than the
-        search asks (:meth:`level`).
+        search asks (:meth:`level`) nor ``region_hysteresis`` nearer the search's origin
+        ``origin_xy`` (the nominal foothold). One beyond the search radius of the origin
+        no longer served.
         """
         cell = self.cell_at(kept_xy, scores)
-        if cell is None:
+        centre = self.cell_at(origin_xy, scores)
+        if cell is None or centre is None:
             return False
         regions = self.regions(scores)
         had = int(regions.labels[cell])
@@ -307,6 +321,11 @@ class FootholdSearch:
             return False
         before = self.level(regions, cell, least_margin)
         if before < 0 or self.level(regions, foothold.cell, least_margin) > before:
+            return False
+        if math.dist(cell, centre) > self.radius_cells:
+            return False
+        gained = math.dist(cell, centre) - math.dist(foothold.cell, centre)
+        if gained * scores.resolution >= self.config.region_hysteresis - 1e-9:
             return False
         x, y = np.asarray(kept_xy, dtype=np.float64)[:2]
         return first_accepted(np.array([[x, y, heights[cell]]])) == 0

@@ -321,7 +321,13 @@ class TerrainPlanner:
                 )
             if kept is not None:
                 self.region_jumps += self._search.needless_jump(
-                    kept, foothold, self.scores, self.snapshot.heights, least_margin, first_accepted
+                    origin,
+                    kept,
+                    foothold,
+                    self.scores,
+                    self.snapshot.heights,
+                    least_margin,
+                    first_accepted,
                 )
             targets[leg] = foothold.position + [0.0, 0.0, r]
             feasible = feasible & reached_at(targets[leg][None])[0]
