@@ -8,7 +8,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from footfall.mapping.snapshot import MapSnapshot
-from footfall.planning.terrain_planner import NoFoothold, StepPoses, TerrainPlanner
+from footfall.planning.footholds import FootholdConfig
+from footfall.planning.terrain_planner import (
+    NoFoothold,
+    StepPoses,
+    TerrainPlanner,
+    TerrainPlannerConfig,
+)
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import load_spec
@@ -19,7 +25,9 @@ FRONT = np.array([True, False, False, False, False, True])  # LF and RF swing
 SUPPORT_AFTER = np.array([True, False, True, True, False, True])  # a ripple-like support
 
 
-def _planner(spec, heights: np.ndarray) -> TerrainPlanner:
+def _planner(
+    spec, heights: np.ndarray, config: TerrainPlannerConfig | None = None
+) -> TerrainPlanner:
     """A planner over a map with the given heights; cell [0, 0] has its corner at (-1, -1)."""
     snapshot = MapSnapshot(
         heights=heights,
@@ -28,7 +36,7 @@ def _planner(spec, heights: np.ndarray) -> TerrainPlanner:
         resolution=RES,
         spread=np.zeros_like(heights),
     )
-    planner = TerrainPlanner(spec)
+    planner = TerrainPlanner(spec, config)
     planner.update(snapshot, score_map(snapshot))
     return planner
 
@@ -252,7 +260,8 @@ def test_a_foot_goes_up_a_step_only_from_a_body_that_can_lift_it_over_the_riser(
 def test_a_replan_keeps_each_foothold_on_its_side_of_a_trench(default_spec):
     """A trench under the front legs' nominal footholds: planned afresh, each foot goes to
     the nearer side; re-planned with the foothold planned before on the other side, it
-    stays there (its steppable region still has an acceptable cell) and no jump counts;
+    stays there, held by a 4 cm region hysteresis (its steppable region still has an
+    acceptable cell) and no jump counts;
     re-planned from a foothold whose region has no acceptable cell within reach any more,
     it moves, a forced move that counts as no jump."""
     spec = default_spec
@@ -264,7 +273,8 @@ def test_a_replan_keeps_each_foothold_on_its_side_of_a_trench(default_spec):
     near_edge = nominal[0, 0] - 0.01
     heights[(x > near_edge) & (x < near_edge + 0.04)] = -0.1  # the trench
     heights[(x > 0.7) & (x < 0.8)] = -0.1  # a second trench, far ahead
-    planner = _planner(spec, heights)
+    held = TerrainPlannerConfig(footholds=FootholdConfig(region_hysteresis=0.04))
+    planner = _planner(spec, heights, held)
     body = [spec.body_height]
     fresh = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), body)
     assert not isinstance(fresh, NoFoothold), fresh

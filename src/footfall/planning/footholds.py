@@ -45,15 +45,18 @@ class FootholdConfig:
             a time down to this.
         region_hysteresis: A re-planned foothold leaves the region of the one planned
             before only for a cell at least this much nearer its nominal position [m]: an
-            edge that came a cell nearer does not flip the foot across it, and a foot whose
-            nominal position moved well away is not held on a small region's rim.
+            edge that came a cell nearer does not flip the foot across it. Off (0) by
+            default: a foot held in its region follows the map, and where the controller's
+            world has come off the robot (a body that slid on its feet, which odometry does
+            not see) it was held on the rim of a small region it had planned to stand in
+            the middle of.
     """
 
     search_radius: float = 0.16
     stability_margin: float = 0.02
     edge_margin_cells: int = 2
     min_edge_margin_cells: int = 0
-    region_hysteresis: float = 0.04
+    region_hysteresis: float = 0.0
 
     def __post_init__(self) -> None:
         require_non_negative(
@@ -307,8 +310,9 @@ class FootholdSearch:
 
         Needlessly: the one before (at ``kept_xy``) still served, valid and passing
         ``first_accepted``, and the new one lies no farther inside its region than the
-        search asks (:meth:`level`) nor ``region_hysteresis`` nearer the search's origin
-        ``origin_xy`` (the nominal foothold). One beyond the search radius of the origin
+        search asks (:meth:`level`) nor nearer the search's origin ``origin_xy`` (the
+        nominal foothold) by ``region_hysteresis`` or a cell, whichever is more: a flip
+        across an edge that came a cell nearer. One beyond the search radius of the origin
         no longer served.
         """
         cell = self.cell_at(kept_xy, scores)
@@ -325,7 +329,7 @@ class FootholdSearch:
         if math.dist(cell, centre) > self.radius_cells:
             return False
         gained = math.dist(cell, centre) - math.dist(foothold.cell, centre)
-        if gained * scores.resolution >= self.config.region_hysteresis - 1e-9:
+        if gained * scores.resolution >= max(self.config.region_hysteresis, scores.resolution):
             return False
         x, y = np.asarray(kept_xy, dtype=np.float64)[:2]
         return first_accepted(np.array([[x, y, heights[cell]]])) == 0
