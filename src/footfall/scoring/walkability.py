@@ -64,9 +64,6 @@ class ScoreConfig:
             from above at 45 degrees or lower, a drop casts a shadow at least as long as it
             is deep; a shorter shadow hides a shallow drop (a groove between cobblestones),
             whose one-cell edge band the scorer already keeps, or a gap narrower than it.
-        shadow_rim_drop: Past a shadow's first cell, ground seen this far or more below the
-            rim counts as the shadow's: a drop that deep (a gap's floor seen through the
-            opening) needs its band where the true edge is [m].
     """
 
     slope_weight: float = 1.0
@@ -78,17 +75,11 @@ class ScoreConfig:
     noise_sigmas: float = 2.5
     shadow_points: int = 48
     shadow_rim_cells: int = 3
-    shadow_rim_drop: float = 0.05
 
     def __post_init__(self) -> None:
         if self.kernel_size < 3 or self.kernel_size % 2 == 0:
             raise ConfigError(f"kernel_size must be odd and >= 3, got {self.kernel_size}")
-        require_positive(
-            "score",
-            kernel_sigma=self.kernel_sigma,
-            threshold=self.threshold,
-            shadow_rim_drop=self.shadow_rim_drop,
-        )
+        require_positive("score", kernel_sigma=self.kernel_sigma, threshold=self.threshold)
         require_non_negative(
             "score", slope_weight=self.slope_weight, proximity_weight=self.proximity_weight
         )
@@ -250,11 +241,7 @@ def _side_bits(side: str) -> npt.NDArray[np.int64]:
 
 
 def shadow_rims(
-    parts: npt.ArrayLike,
-    points: npt.ArrayLike,
-    known: npt.ArrayLike,
-    config: ScoreConfig,
-    heights: npt.ArrayLike | None = None,
+    parts: npt.ArrayLike, points: npt.ArrayLike, known: npt.ArrayLike, config: ScoreConfig
 ) -> npt.NDArray[np.bool_]:
     """Slivers of a rim at the edge of a shadow: cells to score as unseen.
 
@@ -264,10 +251,8 @@ def shadow_rims(
     Such a cell is known and well seen on one side (the neighbour there has caught at least
     ``shadow_points``), yet half or more of its parts along the opposite side were never
     hit and at least ``shadow_rim_cells`` cells across that side are unknown (beyond the
-    window counts as unknown). Given the ``heights``, the cells past the first may instead
-    lie ``shadow_rim_drop`` or more below the rim: the floor of a deep gap, seen again
-    through the opening past a shadow too short for the rule alone. Scored as unknown, the
-    sliver keeps the kernel's band of invalid cells where the true edge puts it.
+    window counts as unknown). Scored as unknown, it keeps the kernel's band of invalid
+    cells where the true edge puts it.
     """
     bits = np.asarray(parts, dtype=np.uint16)
     seen = np.asarray(known, dtype=bool)
@@ -281,16 +266,10 @@ def shadow_rims(
         return seen & (never_hit >= (SUB + 1) // 2)
 
     out = np.zeros(seen.shape, dtype=bool)
-    if heights is not None:
-        h = np.where(seen, np.asarray(heights, dtype=np.float64), np.inf)
-        deep_below = np.where(seen, h - config.shadow_rim_drop, -np.inf)
     for side in opposite:  # open on +x: a shadow beyond along +x, well seen behind; ...
-        shadow = _across(~seen, side, 1, True)
-        for d in range(2, config.shadow_rim_cells + 1):
-            dark = _across(~seen, side, d, True)
-            if heights is not None:
-                dark |= _across(h, side, d, np.inf) <= deep_below
-            shadow &= dark
+        shadow = np.logical_and.reduce(
+            [_across(~seen, side, d, True) for d in range(1, config.shadow_rim_cells + 1)]
+        )
         out |= open_side(side) & shadow & _across(well_seen, opposite[side], 1, False)
     return out
 
@@ -332,7 +311,7 @@ def score_map(snapshot: MapSnapshot, config: ScoreConfig | None = None) -> Score
     sigma = None if snapshot.variance is None else np.sqrt(snapshot.variance)
     heights = snapshot.heights
     if snapshot.parts is not None and snapshot.points is not None:
-        rims = shadow_rims(snapshot.parts, snapshot.points, np.isfinite(heights), c, heights)
+        rims = shadow_rims(snapshot.parts, snapshot.points, np.isfinite(heights), c)
         if rims.any():
             heights = np.where(rims, np.nan, heights)
     slope, proximity, score, valid = score_heights(heights, snapshot.resolution, c, sigma)
