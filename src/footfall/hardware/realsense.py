@@ -22,6 +22,7 @@ waits for room) unless asked to play at its own pace, as a camera would.
 
 from __future__ import annotations
 
+import contextlib
 import queue
 import threading
 import time
@@ -117,11 +118,8 @@ class RealSenseStream:
         self._sensors = []
         if recording:
             device.set_status_changed_callback(self._on_status)
+            device.pause()  # until every sensor listens: one started late loses its first frames
         try:
-            # A recording starts reading at its first sensor's start, and a sensor not yet
-            # started loses its frames (the first IMU samples): hold it until all listen.
-            if recording:
-                device.pause()
             for sensor, chosen in profiles:
                 sensor.open(chosen)
                 self._sensors.append(sensor)
@@ -368,8 +366,6 @@ class RealSenseStream:
         self._closed.set()
         for sensor in self._sensors:
             for step in (sensor.stop, sensor.close):
-                try:
+                with contextlib.suppress(RuntimeError):
                     step()
-                except RuntimeError:
-                    pass
         self._sensors = []
