@@ -20,6 +20,10 @@ COMMANDS = {
         "footfall.cli.convert",
         "convert recorded data: Redwood to the TUM layout, TUM or Redwood to MCAP",
     ),
+    "odometry": (
+        "footfall.cli.odometry",
+        "track a depth sequence's camera from its own images (visual odometry)",
+    ),
     "bench": ("footfall.cli.bench", "measure footfall's speed"),
     "plan": (
         "footfall.cli.plan",

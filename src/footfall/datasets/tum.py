@@ -88,21 +88,20 @@ def read_tum_sequence(
     return frames, skipped
 
 
-def read_fixed_view(path: str | Path, camera_pose: Pose, fps: float = 30.0) -> list[SequenceFrame]:
-    """Depth frames all taken from one known camera pose (no trajectory).
+def stamped_depth_images(path: str | Path, fps: float = 30.0) -> list[tuple[float, Path]]:
+    """A sequence's depth images and their times, in time order.
 
     Args:
         path: One depth PNG; or a folder with ``depth.txt``, else ``depth/*.png``, else
             ``*depth*.png`` (stamped ``i / fps``).
-        camera_pose: The optical frame's pose in the (z-up) world.
         fps: Frame rate for files without timestamps [Hz].
 
     Raises:
-        DatasetError: No depth image at ``path``.
+        DatasetError: No depth image at ``path``, or a malformed ``depth.txt``.
     """
     p = Path(path)
     if p.is_file():
-        return [SequenceFrame(0.0, p, camera_pose, 0.0)]
+        return [(0.0, p)]
     if not p.is_dir():
         raise DatasetError(f"missing depth image or sequence {p}")
     if (p / "depth.txt").is_file():
@@ -116,7 +115,21 @@ def read_fixed_view(path: str | Path, camera_pose: Pose, fps: float = 30.0) -> l
         stamped = [(k / fps, f) for k, f in enumerate(files)]
     if not stamped:
         raise DatasetError(f"no depth image in {p} (depth.txt, depth/*.png or *depth*.png)")
-    return [SequenceFrame(t, f, camera_pose, 0.0) for t, f in stamped]
+    return stamped
+
+
+def read_fixed_view(path: str | Path, camera_pose: Pose, fps: float = 30.0) -> list[SequenceFrame]:
+    """Depth frames all taken from one known camera pose (no trajectory).
+
+    Args:
+        path: As :func:`stamped_depth_images` reads it.
+        camera_pose: The optical frame's pose in the (z-up) world.
+        fps: Frame rate for files without timestamps [Hz].
+
+    Raises:
+        DatasetError: No depth image at ``path``.
+    """
+    return [SequenceFrame(t, f, camera_pose, 0.0) for t, f in stamped_depth_images(path, fps)]
 
 
 def load_depth_png(path: str | Path) -> npt.NDArray[np.uint16]:

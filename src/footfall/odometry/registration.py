@@ -1,0 +1,290 @@
+"""Depth odometry: each depth frame registered against a local map of the frames before it.
+
+The camera's path from its depth images alone, where the source systems took it from a SLAM
+(the thesis ran ORB-SLAM3 on its RealSense, §4.5). Each frame's points, thinned on a voxel grid
+and given covariances from their neighbours, are registered by VGICP (small_gicp; Koide et al.,
+"Voxelized GICP", ICRA 2021) against a Gaussian voxel map of the frames before it, from the
+pose a constant-velocity model predicts; the registered frame then joins the map, whose voxels
+not seen for a while are forgotten. A frame that does not register (too few points, the
+optimiser not converging, too few of its points matched, or a motion no hand-held or robot
+camera makes between two frames) is skipped and the next one tried from the last good pose;
+after ``recover_frames`` skipped frames in a row the track is lost.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from footfall.checks import require_positive
+from footfall.errors import ConfigError, FootfallError
+from footfall.sensing.camera import PinholeCamera
+from footfall.sensing.pose import Pose
+
+
+class TrackingLostError(FootfallError):
+    """Depth odometry could not register a run of frames and cannot say where the camera is.
+
+    Attributes:
+        stamp: The last frame tried [s].
+        last_pose: The camera's last registered pose in the odometry's world.
+    """
+
+    def __init__(self, message: str, stamp: float, last_pose: Pose) -> None:
+        super().__init__(message)
+        self.stamp = stamp
+        self.last_pose = last_pose
+
+
+@dataclass(frozen=True)
+class OdometryConfig:
+    """Depth odometry settings.
+
+    Attributes:
+        stride_px: Every ``stride_px``-th row and column of the image is back-projected.
+        min_range_m: Nearer readings are dropped [m].
+        max_range_m: Farther readings are dropped (a depth camera's error grows with the
+            square of the range) [m].
+        downsampling_m: Voxel grid a frame's points are thinned on [m].
+        map_voxel_m: Voxel size of the Gaussian map frames register against [m].
+        coarse_voxel_m: A second, coarser map, registered against first: a VGICP point
+            finds its match in the voxel it falls in, so the coarse map catches motions the
+            fine one would miss (fast turns with far walls in view) [m].
+        neighbours: Points each point's covariance is estimated from.
+        max_correspondence_m: Farthest a point and its map voxel may lie apart to match [m].
+        max_iterations: Optimiser iterations per frame.
+        min_points: A frame with fewer thinned points is skipped.
+        min_inlier_share: A registration matching fewer of the frame's points is refused.
+        max_step_m: A registration moving the camera farther than this from the predicted
+            pose between two frames is refused [m].
+        max_turn_deg: Likewise for the turn [deg].
+        map_horizon_frames: Map voxels no frame has touched for this many frames are forgotten.
+        recover_frames: Skipped frames in a row after which the track is lost.
+        threads: Threads small_gicp may use.
+    """
+
+    stride_px: int = 2
+    min_range_m: float = 0.2
+    max_range_m: float = 5.0
+    downsampling_m: float = 0.02
+    map_voxel_m: float = 0.08
+    coarse_voxel_m: float = 0.3
+    neighbours: int = 10
+    max_correspondence_m: float = 0.1
+    max_iterations: int = 30
+    min_points: int = 200
+    min_inlier_share: float = 0.4
+    max_step_m: float = 0.25
+    max_turn_deg: float = 30.0
+    map_horizon_frames: int = 100
+    recover_frames: int = 10
+    threads: int = 1
+
+    def __post_init__(self) -> None:
+        require_positive(
+            "depth odometry",
+            min_range_m=self.min_range_m,
+            downsampling_m=self.downsampling_m,
+            map_voxel_m=self.map_voxel_m,
+            coarse_voxel_m=self.coarse_voxel_m,
+            max_correspondence_m=self.max_correspondence_m,
+            max_step_m=self.max_step_m,
+            max_turn_deg=self.max_turn_deg,
+        )
+        if self.max_range_m <= self.min_range_m:
+            raise ConfigError(
+                f"max_range_m ({self.max_range_m}) must exceed min_range_m ({self.min_range_m})"
+            )
+        if min(self.stride_px, self.neighbours, self.max_iterations, self.threads) < 1:
+            raise ConfigError("stride_px, neighbours, max_iterations and threads must be >= 1")
+        if min(self.min_points, self.map_horizon_frames, self.recover_frames) < 1:
+            raise ConfigError("min_points, map_horizon_frames and recover_frames must be >= 1")
+        if not 0.0 < self.min_inlier_share <= 1.0:
+            raise ConfigError(f"min_inlier_share must be in (0, 1], got {self.min_inlier_share}")
+
+
+@dataclass(frozen=True)
+class OdometryStep:
+    """What one frame did.
+
+    Attributes:
+        stamp: The frame's time [s].
+        camera_in_world: The camera's optical frame in the odometry's world (the first
+            frame's, unless another start was given); the last good pose when skipped.
+        registered: Whether the frame registered (and joined the map).
+        inlier_share: Share of the frame's thinned points matched to the map.
+        points: The frame's thinned points.
+        reason: Why the frame was skipped ("" when registered).
+    """
+
+    stamp: float
+    camera_in_world: Pose
+    registered: bool
+    inlier_share: float
+    points: int
+    reason: str = ""
+
+
+def import_small_gicp() -> Any:
+    """The small_gicp module.
+
+    Raises:
+        ConfigError: It is not installed (it comes with ``footfall[odometry]``).
+    """
+    try:
+        return importlib.import_module("small_gicp")
+    except ImportError as exc:
+        raise ConfigError(
+            "depth odometry needs small_gicp: install footfall[odometry] (pip install small-gicp)"
+        ) from exc
+
+
+def motion_between(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64]) -> tuple[float, float]:
+    """Distance [m] and angle [deg] between two 4x4 poses."""
+    delta = np.linalg.inv(a) @ b
+    cos = (np.trace(delta[:3, :3]) - 1.0) / 2.0
+    return float(np.linalg.norm(delta[:3, 3])), math.degrees(math.acos(min(1.0, max(-1.0, cos))))
+
+
+class DepthOdometry:
+    """Track a depth camera from its images (see the module docstring).
+
+    Args:
+        camera: The depth camera's intrinsics (its range limits are the config's).
+        config: Settings.
+        start: The first frame's pose in the world (default: the world is the first frame).
+
+    Raises:
+        ConfigError: small_gicp is not installed.
+    """
+
+    def __init__(
+        self, camera: PinholeCamera, config: OdometryConfig | None = None, start: Pose | None = None
+    ) -> None:
+        self.config = config or OdometryConfig()
+        self._gicp = import_small_gicp()
+        c = self.config
+        self.camera = PinholeCamera(
+            camera.fx, camera.fy, camera.cx, camera.cy, camera.width, camera.height,
+            min_range=c.min_range_m, max_range=c.max_range_m,
+        )  # fmt: skip
+        self._start = (start or Pose.identity()).matrix
+        self._map: Any = None
+        self._coarse: Any = None
+        self._last = self._start.copy()  # the last registered pose, 4x4
+        self._velocity = np.eye(4)  # motion over one frame, in the camera's frame
+        self._last_stamp: float | None = None
+        self._skipped = 0
+        self.frames = 0
+        self.registered = 0
+
+    @property
+    def camera_in_world(self) -> Pose:
+        """The camera's last registered pose."""
+        return Pose.from_matrix(self._last)
+
+    def track(
+        self, depth: npt.ArrayLike, stamp: float, depth_scale: float | None = None
+    ) -> OdometryStep:
+        """Register one depth image taken at ``stamp`` [s].
+
+        Args:
+            depth: Shape (height, width): float metres, or integers with ``depth_scale``.
+            stamp: The image's time [s]; frames must come in time order.
+            depth_scale: Metres per unit for integer depth.
+
+        Raises:
+            TrackingLostError: ``recover_frames`` frames in a row did not register.
+            DepthImageError: A malformed image.
+        """
+        c, gicp = self.config, self._gicp
+        self.frames += 1
+        points, _ = self.camera.depth_to_points(depth, depth_scale, c.stride_px)
+        cloud, _ = gicp.preprocess_points(
+            points.astype(np.float64), c.downsampling_m, c.neighbours, c.threads
+        )
+        n = int(cloud.size())
+        if self._map is None:
+            if n < c.min_points:
+                return self._skip(stamp, n, f"{n} points after thinning, fewer than {c.min_points}")
+            self._join(cloud, self._last, stamp)
+            return OdometryStep(stamp, self.camera_in_world, True, 1.0, n)
+        if n < c.min_points:
+            return self._skip(stamp, n, f"{n} points after thinning, fewer than {c.min_points}")
+        # Constant velocity over the frames skipped since the last registered one.
+        predicted = self._last @ np.linalg.matrix_power(self._velocity, self._skipped + 1)
+        coarse = gicp.align(
+            self._coarse, cloud, predicted,
+            max_correspondence_distance=c.coarse_voxel_m,
+            num_threads=c.threads, max_iterations=c.max_iterations,
+        )  # fmt: skip
+        result = gicp.align(
+            self._map, cloud, coarse.T_target_source,
+            max_correspondence_distance=c.max_correspondence_m,
+            num_threads=c.threads, max_iterations=c.max_iterations,
+        )  # fmt: skip
+        pose = np.asarray(result.T_target_source, dtype=np.float64)
+        share = result.num_inliers / n
+        step_m, turn_deg = motion_between(predicted, pose)
+        reason = ""
+        if not result.converged:
+            reason = f"registration did not converge in {c.max_iterations} iterations"
+        elif share < c.min_inlier_share:
+            reason = (
+                f"{share:.0%} of its points matched the map, fewer than {c.min_inlier_share:.0%}"
+            )
+        elif step_m > c.max_step_m or turn_deg > c.max_turn_deg:
+            reason = f"registered {step_m:.3f} m and {turn_deg:.1f} deg from the predicted pose"
+        if reason:
+            return self._skip(stamp, n, reason, share)
+        frames = self._skipped + 1
+        motion = np.linalg.inv(self._last) @ pose
+        self._velocity = motion if frames == 1 else _fraction(motion, 1.0 / frames)
+        self._join(cloud, pose, stamp)
+        return OdometryStep(stamp, self.camera_in_world, True, share, n)
+
+    def _join(self, cloud: Any, pose: npt.NDArray[np.float64], stamp: float) -> None:
+        """Add a registered frame to the map."""
+        c = self.config
+        if self._map is None:
+            self._map = self._gicp.GaussianVoxelMap(c.map_voxel_m)
+            self._coarse = self._gicp.GaussianVoxelMap(c.coarse_voxel_m)
+            for voxels in (self._map, self._coarse):
+                voxels.set_lru(c.map_horizon_frames, 10)
+        self._map.insert(cloud, pose)
+        self._coarse.insert(cloud, pose)
+        self._last = pose
+        self._last_stamp = stamp
+        self._skipped = 0
+        self.registered += 1
+
+    def _skip(self, stamp: float, n: int, reason: str, share: float = 0.0) -> OdometryStep:
+        """Skip a frame; past ``recover_frames`` in a row, the track is lost."""
+        self._skipped += 1
+        if self._skipped >= self.config.recover_frames:
+            since = "" if self._last_stamp is None else f" since {self._last_stamp:.3f} s"
+            x, y, z = self._last[:3, 3]
+            raise TrackingLostError(
+                f"tracking lost at {stamp:.3f} s: {self._skipped} frames in a row did not "
+                f"register{since} (the last: {reason}); last pose ({x:.3f}, {y:.3f}, {z:.3f}) m",
+                stamp,
+                self.camera_in_world,
+            )
+        return OdometryStep(stamp, self.camera_in_world, False, share, n, reason)
+
+
+def _fraction(motion: npt.NDArray[np.float64], share: float) -> npt.NDArray[np.float64]:
+    """The motion scaled along its screw by ``share`` (translation and rotation vector)."""
+    from scipy.spatial.transform import Rotation
+
+    out = np.eye(4)
+    out[:3, :3] = Rotation.from_rotvec(
+        Rotation.from_matrix(motion[:3, :3]).as_rotvec() * share
+    ).as_matrix()
+    out[:3, 3] = motion[:3, 3] * share
+    return out
