@@ -211,3 +211,24 @@ def test_footfall_odometry_tracks_a_real_kinect_sequence(tmp_path):
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["registered"] == metrics["frames"] == 37
     assert metrics["ate_rmse_m"] < 0.01
+
+
+def test_a_sequence_without_poses_maps_by_its_own_odometry(tmp_path):
+    """A room seen by a walking camera, mapped once by its recorded poses and once by depth
+    odometry with the first frame put over the floor it sees: the floors agree within half
+    a centimetre of spread and a centimetre of height, and a frame that did not register is
+    not fused."""
+    poses = _walk(14)
+    sequence = _write_sequence(tmp_path / "seq", poses)
+    bare = _write_sequence(tmp_path / "bare", poses)
+    (bare / "groundtruth.txt").unlink()
+    common = ["--intrinsics", *INTRINSICS, "--sensor", "ideal"]
+    assert main(["map", "--tum", str(sequence), *common, "--out", str(tmp_path / "truth")]) == 0
+    args = ["map", "--tum", str(bare), *common, "--pose", "odometry"]
+    assert main([*args, "--out", str(tmp_path / "odo")]) == 0
+    truth = json.loads((tmp_path / "truth" / "metrics.json").read_text())
+    odometry = json.loads((tmp_path / "odo" / "metrics.json").read_text())
+    assert odometry["odometry"]["registered"] == 14 and odometry["frames"] == 14
+    spread = odometry["floor_height_spread_m"] - truth["floor_height_spread_m"]
+    assert abs(spread) < 0.005, (odometry, truth)
+    assert abs(odometry["floor_height_median_m"] - truth["floor_height_median_m"]) < 0.01

@@ -118,6 +118,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--depth-scale", type=float, default=1.0 / 5000.0, help="metres per depth unit (with --tum)"
     )
+    p.add_argument(
+        "--pose",
+        choices=("recorded", "odometry"),
+        default="recorded",
+        help="the camera's poses for --tum: its groundtruth.txt, or tracked from its own depth "
+        "images (footfall odometry; the first frame placed over the floor it sees, or by "
+        "--camera-height and --camera-pitch-deg; needs footfall[odometry])",
+    )
     add_recording_options(p)
     p.add_argument("--out", type=Path, default=Path("footfall-out/map"), help="output folder")
     p.set_defaults(handler=run)
@@ -150,6 +158,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
         realsense=args.realsense,
         trajectory=args.trajectory,
         realsense_options=key_values("--realsense-option", args.realsense_option),
+        pose=args.pose,
     )
     if args.tum is not None or args.realsense is not None:
         console.print(f"Mapping recorded sequence {args.tum or args.realsense}")

@@ -234,11 +234,21 @@ class TumSequenceSource:
         depth_scale: float = TUM_DEPTH_SCALE,
         camera_pose: Pose | None = None,
         look_ahead_m: float = 2.0,
+        frame_poses: dict[float, Pose] | None = None,
     ) -> None:
         self.bus = bus
         self.camera = camera
         self.depth_scale = depth_scale
         self.frames_implausible = 0
+        if frame_poses is not None:  # poses from elsewhere (odometry), in a z-up world
+            stamped = stamped_depth_images(folder)
+            self.frames = [
+                SequenceFrame(t, f, frame_poses[t], 0.0) for t, f in stamped if t in frame_poses
+            ]
+            self.skipped = len(stamped) - len(self.frames)
+            self.poses = [f.camera_pose for f in self.frames]
+            self.centres = self.poses
+            return
         if camera_pose is not None:
             self.frames, self.skipped = read_fixed_view(folder, camera_pose), 0
             self.poses = [camera_pose for _ in self.frames]
@@ -291,6 +301,7 @@ def map_tum_sequence(
     camera_pose: Pose | None = None,
     bus: InProcessBus | None = None,
     on_mapping: Callable[[MappingNode], None] | None = None,
+    frame_poses: dict[float, Pose] | None = None,
 ) -> SequenceMap:
     """Build the height map of a recorded sequence, following the camera.
 
@@ -306,12 +317,16 @@ def map_tum_sequence(
             trajectory.
         bus: The bus to play on (a recorder may tap it); a new one by default.
         on_mapping: Called with the mapping node once it stands.
+        frame_poses: The camera's pose in a z-up world by depth frame time, instead of
+            ``groundtruth.txt`` (frames without one are skipped).
 
     Returns:
         The map, its scores, the camera path and metrics.
     """
     bus = bus if bus is not None else InProcessBus()
-    source = TumSequenceSource(bus, folder, camera, up, depth_scale, camera_pose)
+    source = TumSequenceSource(
+        bus, folder, camera, up, depth_scale, camera_pose, frame_poses=frame_poses
+    )
     start = source.centres[0].position
     mapping = MappingNode(
         bus,

@@ -57,6 +57,8 @@ class MapRequest:
         trajectory: The camera's poses for a RealSense recording (TUM format).
         realsense_options: librealsense's depth filters (``decimation``, ``spatial``,
             ``temporal``, ``hole_filling``).
+        pose: Where a TUM sequence's poses come from: ``"recorded"`` (its groundtruth.txt)
+            or ``"odometry"`` (tracked from its depth images, :mod:`footfall.odometry`).
     """
 
     terrain: str = "course"
@@ -81,6 +83,7 @@ class MapRequest:
     realsense: Path | None = None
     trajectory: Path | None = None
     realsense_options: dict[str, str] = field(default_factory=dict)
+    pose: str = "recorded"
 
     @property
     def fixed_camera(self) -> bool:
@@ -202,6 +205,10 @@ def run_map(request: MapRequest, on_tick: Callable[[float], None] | None = None)
         raise ConfigError("map one recording: --tum or --realsense")
     if request.trajectory is not None and request.realsense is None:
         raise ConfigError("--trajectory goes with --realsense (a TUM sequence has its own)")
+    if request.pose not in ("recorded", "odometry"):
+        raise ConfigError(f"--pose is recorded or odometry, got {request.pose!r}")
+    if request.pose == "odometry" and request.tum is None:
+        raise ConfigError("--pose odometry tracks a TUM-layout sequence: give --tum")
     fusion = request.fusion or ("variance" if recorded else "latest")
     map_config = HeightMapConfig(
         fusion=fusion, drift=DriftConfig(enabled=request.drift_compensation)
@@ -318,8 +325,18 @@ def _map_recording(
     from footfall.sensing.noise import sensor_noise
 
     assert request.tum is not None
-    pose = None
-    if request.fixed_camera:
+    pose = frame_poses = None
+    tracked: dict[str, object] = {}
+    if request.pose == "odometry":
+        from footfall.reports.odometry import OdometryRequest, odometry_over_floor
+
+        frame_poses, report = odometry_over_floor(
+            OdometryRequest(request.tum, request.intrinsics, request.depth_scale),
+            _fixed_camera_pose(request) if request.fixed_camera else None,
+        )
+        tracked = {"odometry": report.to_json()}
+        first = read_fixed_view(request.tum, Pose.identity())[0].depth_path
+    elif request.fixed_camera:
         pose = _fixed_camera_pose(request)
         first = read_fixed_view(request.tum, pose)[0].depth_path
     else:
@@ -341,5 +358,7 @@ def _map_recording(
         camera_pose=pose,
         bus=bus,
         on_mapping=recorders.mapping_started,
+        frame_poses=frame_poses,
     )
+    sequence.metrics.update(tracked)
     return MapReport.of_sequence(sequence, score_config)
