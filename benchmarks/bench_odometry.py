@@ -1,0 +1,155 @@
+"""Depth odometry on real sequences: footfall's against small_gicp used as its examples do.
+
+For each TUM-layout sequence given (default: the shared freiburg1_xyz frames and the Redwood
+living room, converted), the camera is tracked by
+
+- ``footfall``: :class:`footfall.odometry.registration.DepthOdometry` (coarse and fine
+  Gaussian voxel maps, constant-velocity prediction, refusal of bad frames);
+- ``small_gicp f2f``: small_gicp's GICP of each frame against the one before it (the
+  library's frame-to-frame example), on the same thinned points;
+- ``small_gicp f2m``: small_gicp's VGICP against one incremental voxel map of the past
+  frames (its odometry example), from the last pose, on the same points;
+
+all in this run, one thread each, on the same back-projected points (every second pixel).
+Reported per method: ATE RMSE after SE(3) alignment [mm] and CPU ms per frame. Run with
+``uv run python benchmarks/bench_odometry.py [SEQUENCE FX FY CX CY ...]``; it prints the
+table and writes ``benchmarks/results/odometry.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import small_gicp
+
+from footfall.datasets.tum import TUM_DEPTH_SCALE, load_depth_png, stamped_depth_images
+from footfall.odometry.evaluation import trajectory_errors
+from footfall.odometry.registration import DepthOdometry, OdometryConfig
+from footfall.sensing.camera import PinholeCamera
+from footfall.sensing.pose import Pose
+from footfall.sensing.trajectory import Trajectory
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "rgbd"
+CONFIG = OdometryConfig()
+
+
+def frames_of(sequence: Path, intrinsics: tuple[float, ...]) -> tuple[list, PinholeCamera]:
+    """The sequence's (time, camera-frame points) and its camera."""
+    stamped = stamped_depth_images(sequence)
+    first = load_depth_png(stamped[0][1])
+    c = CONFIG
+    camera = PinholeCamera(
+        *intrinsics, first.shape[1], first.shape[0], c.min_range_m, c.max_range_m
+    )
+    return [(t, load_depth_png(p)) for t, p in stamped], camera
+
+
+def row(stamp: float, pose: np.ndarray) -> list[float]:
+    """A TUM row from a 4x4 pose."""
+    p = Pose.from_matrix(pose)
+    return [stamp, *p.position, *p.rotation.as_quat()]
+
+
+def track_footfall(frames: list, camera: PinholeCamera) -> tuple[list, list[float]]:
+    """Track with footfall's odometry: rows and CPU ms per frame."""
+    odometry = DepthOdometry(camera, CONFIG)
+    rows, cpu = [], []
+    for stamp, depth in frames:
+        start = time.process_time()
+        step = odometry.track(depth, stamp, TUM_DEPTH_SCALE)
+        cpu.append(1000.0 * (time.process_time() - start))
+        rows.append(row(stamp, step.camera_in_world.matrix))
+    return rows, cpu
+
+
+def track_small_gicp(frames: list, camera: PinholeCamera, to_map: bool) -> tuple[list, list[float]]:
+    """small_gicp as its examples use it: frame to frame (GICP) or frame to map (VGICP)."""
+    c = CONFIG
+    pose, rows, cpu = np.eye(4), [], []
+    previous = voxels = None
+    for stamp, depth in frames:
+        start = time.process_time()
+        points, _ = camera.depth_to_points(depth, TUM_DEPTH_SCALE, c.stride_px)
+        cloud, tree = small_gicp.preprocess_points(points, c.downsampling_m, c.neighbours, 1)
+        if to_map:
+            if voxels is None:
+                voxels = small_gicp.GaussianVoxelMap(c.map_voxel_m)
+            else:
+                pose = small_gicp.align(voxels, cloud, pose, num_threads=1).T_target_source
+            voxels.insert(cloud, pose)
+        else:
+            if previous is not None:
+                result = small_gicp.align(
+                    previous[0], cloud, previous[1], max_correspondence_distance=0.1
+                )
+                pose = pose @ result.T_target_source
+            previous = (cloud, tree)
+        cpu.append(1000.0 * (time.process_time() - start))
+        rows.append(row(stamp, np.asarray(pose)))
+    return rows, cpu
+
+
+def measure(sequence: Path, intrinsics: tuple[float, ...]) -> dict[str, dict[str, float]]:
+    """Every method on one sequence: ATE [mm] and CPU ms per frame."""
+    frames, camera = frames_of(sequence, intrinsics)
+    truth = Trajectory.read(sequence / "groundtruth.txt").table
+    methods = {
+        "footfall": lambda: track_footfall(frames, camera),
+        "small_gicp f2f": lambda: track_small_gicp(frames, camera, to_map=False),
+        "small_gicp f2m": lambda: track_small_gicp(frames, camera, to_map=True),
+    }
+    out = {}
+    for name, track in methods.items():
+        rows, cpu = track()
+        errors = trajectory_errors(np.array(rows), truth)
+        out[name] = {
+            "ate_mm": 1000.0 * errors.ate_rmse_m,
+            "cpu_ms_per_frame": float(np.mean(cpu[1:])),
+            "frames": len(rows),
+            "path_m": errors.reference_length_m,
+        }
+    return out
+
+
+def sequences(args: list[str], scratch: Path) -> list[tuple[str, Path, tuple[float, ...]]]:
+    """The sequences asked for, or the shared ones."""
+    if args:
+        return [
+            (Path(args[k]).name, Path(args[k]), tuple(float(v) for v in args[k + 1 : k + 5]))
+            for k in range(0, len(args), 5)
+        ]
+    from footfall.datasets.redwood import convert_redwood
+
+    redwood = scratch / "redwood"
+    convert_redwood(SHARED / "redwood_livingroom", redwood)
+    return [
+        ("tum_fr1_xyz", SHARED / "tum_fr1_xyz", (517.3, 516.5, 318.6, 255.3)),
+        ("redwood_livingroom", redwood, (525.0, 525.0, 319.5, 239.5)),
+    ]
+
+
+def main() -> None:
+    """Measure and write the results."""
+    results = {}
+    with tempfile.TemporaryDirectory() as scratch:
+        for name, folder, intrinsics in sequences(sys.argv[1:], Path(scratch)):
+            results[name] = measure(folder, intrinsics)
+            for method, r in results[name].items():
+                print(
+                    f"{name:20s} {method:16s} ATE {r['ate_mm']:6.1f} mm  "
+                    f"{r['cpu_ms_per_frame']:6.1f} ms/frame  ({r['frames']} frames, "
+                    f"{r['path_m']:.2f} m)"
+                )
+    out = Path(__file__).parent / "results" / "odometry.json"
+    out.parent.mkdir(exist_ok=True)
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"Wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
