@@ -15,7 +15,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from footfall.recording.replay import Replayer, ReplayRequest
+from footfall.recording.replay import Replayer
+from footfall.recording.replay_request import ReplayRequest
 from footfall.reports.walk import run_walk
 from footfall.sim.walk_request import WalkRequest, prepare_walk
 

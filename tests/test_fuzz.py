@@ -27,7 +27,8 @@ from footfall.messages import DepthFrame, PoseEstimate, WalkCommand
 from footfall.messages.codec import decode
 from footfall.planning.footholds import FootholdConfig, FootholdSearch
 from footfall.recording.reader import Recording
-from footfall.recording.replay import Replayer, ReplayRequest
+from footfall.recording.replay import Replayer
+from footfall.recording.replay_request import ReplayRequest
 from footfall.robot.spec import load_spec
 from footfall.runtime.fault_spec import FaultSpec
 from footfall.scoring.walkability import ScoreConfig, score_map

@@ -11,7 +11,8 @@ import pytest
 from conftest import shared_data
 from footfall.cli import main
 from footfall.errors import DatasetError
-from footfall.recording.replay import Replayer, ReplayRequest
+from footfall.recording.replay import Replayer
+from footfall.recording.replay_request import ReplayRequest
 from footfall.recording.ros_types import typestore
 from footfall.recording.session import Recorders
 from footfall.runtime.bus import InProcessBus

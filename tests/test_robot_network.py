@@ -146,7 +146,8 @@ def test_a_client_in_another_process_walks_the_robot_across_the_stairs(tmp_path)
     counts = Counter(m.topic for m in recording.messages({"/command", "/footfall/mode"}))
     assert counts["/command"] > 100 and counts["/footfall/mode"] >= 1
     assert "/camera/depth/image_raw" in recording.channels
-    from footfall.recording.replay import Replayer, ReplayRequest
+    from footfall.recording.replay import Replayer
+    from footfall.recording.replay_request import ReplayRequest
 
     assert Replayer(ReplayRequest(record, fast=True)).run().frames > 50
 

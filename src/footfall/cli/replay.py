@@ -45,6 +45,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     add_camera_pose_options(p, "a fixed camera, for a recording with no pose")
     p.add_argument(
+        "--pose",
+        choices=("recorded", "odometry"),
+        default="recorded",
+        help="the camera's poses: the recording's (topic, TF or a fixed camera), or tracked "
+        "from its depth images (footfall odometry; the first frame over the floor it sees, or "
+        "at --camera-height and --camera-pitch-deg; needs footfall[odometry])",
+    )
+    p.add_argument(
         "--sensor",
         choices=tuple(SENSORS),
         default="kinect",
@@ -64,7 +72,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace, console: Console) -> int:
     """Replay, write the map outputs, print the metrics."""
-    from footfall.recording.replay import ReplayRequest
+    from footfall.recording.replay_request import ReplayRequest
     from footfall.reports.replay import run_replay
 
     request = ReplayRequest(
@@ -80,6 +88,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
         camera_height=args.camera_height,
         camera_pitch_deg=args.camera_pitch_deg,
         camera_roll_deg=args.camera_roll_deg,
+        pose=args.pose,
     )
     console.print(f"Replaying {args.file}" + ("" if args.fast else f" at {args.rate:g}x"))
     report = run_replay(request, rerun=args.rerun, rerun_spawn=args.rerun_spawn)

@@ -14,12 +14,9 @@ A ROS bag's poses are read first; each depth image then takes the pose nearest i
 from __future__ import annotations
 
 import bisect
-import math
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -30,6 +27,7 @@ from footfall.messages import DepthFrame, GroundPrior, PoseEstimate
 from footfall.messages.codec import Message
 from footfall.nodes.mapping import MappingNode
 from footfall.recording.reader import RecordedMessage, Recording
+from footfall.recording.replay_request import ReplayCounts, ReplayRequest
 from footfall.recording.ros_decode import (
     TransformHistory,
     TransformTree,
@@ -48,72 +46,6 @@ from footfall.sensing.pose import Pose
 CORRUPT_DATA = (KeyError, ValueError, TypeError, IndexError, AttributeError, OverflowError)
 POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
 DEPTH_TYPES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
-
-
-@dataclass(frozen=True)
-class ReplayRequest:
-    """What to replay (the options of ``footfall replay``).
-
-    Attributes:
-        path: A footfall MCAP file, a ROS 2 bag (folder or ``.mcap``) or a ROS 1 ``.bag``.
-        rate: Playback speed against the recording's clock; ignored with ``fast``.
-        fast: Play as fast as the mapping goes.
-        depth_topic: The depth image topic; None to pick the one there is.
-        info_topic: Its ``CameraInfo`` topic; None for the one beside it.
-        pose_topic: A ``PoseStamped`` or ``Odometry`` topic of the depth camera's optical
-            frame in a z-up world.
-        tf_frames: ``(world, camera)`` frames to look the camera's pose up in TF instead.
-        sensor: The depth sensor's noise model (recordings that do not carry one).
-        fusion: Per-cell fusion rule; None: the recording's, else ``variance``.
-        max_pose_gap_s: Largest time between a depth image and its pose [s].
-        camera_height: For a recording with no pose: the camera's fixed height over the
-            floor [m] (with ``camera_pitch_deg`` and ``camera_roll_deg``).
-        camera_pitch_deg: How far that camera looks down [deg].
-        camera_roll_deg: How far its right side dips [deg].
-    """
-
-    path: Path
-    rate: float = 1.0
-    fast: bool = False
-    depth_topic: str | None = None
-    info_topic: str | None = None
-    pose_topic: str | None = None
-    tf_frames: tuple[str, str] | None = None
-    sensor: str = "kinect"
-    fusion: str | None = None
-    max_pose_gap_s: float = 0.05
-    camera_height: float | None = None
-    camera_pitch_deg: float | None = None
-    camera_roll_deg: float | None = None
-
-    def fixed_camera(self) -> tuple[Pose, Pose] | None:
-        """The fixed camera pose given, and the map centre 2 m ahead of it; or None."""
-        if self.camera_height is None:
-            return None
-        from footfall.pointcloud.ground import CameraOverFloor
-
-        floor = CameraOverFloor.from_angles(
-            self.camera_height,
-            math.radians(self.camera_pitch_deg or 0.0),
-            math.radians(self.camera_roll_deg or 0.0),
-        )
-        camera = Pose(np.array([0.0, 0.0, floor.height_m]), floor.rotation_camera_to_map)
-        forward = camera.rotation.apply([0.0, 0.0, 1.0])
-        forward[2] = 0.0
-        ahead = forward / max(float(np.linalg.norm(forward)), 1e-9) * 2.0
-        return camera, Pose(camera.position + ahead, camera.rotation)
-
-
-@dataclass
-class ReplayCounts:
-    """What became of a recording's messages."""
-
-    depth_images: int = 0
-    frames_mapped: int = 0
-    frames_without_pose: int = 0
-    frames_without_info: int = 0
-    time_gaps: int = 0
-    longest_gap_s: float = 0.0
 
 
 def _camera(info: Any, noise: DepthNoiseModel, limits: tuple[float, float]) -> PinholeCamera:
@@ -190,6 +122,17 @@ class Replayer:
         self.tf_frames = request.tf_frames
         self.pose_topic = request.pose_topic
         self.fixed = request.fixed_camera()
+        self.odometry = None
+        if request.pose == "odometry":
+            from footfall.odometry.poses import OdometryPoses
+
+            if self.tf_frames is not None or self.pose_topic is not None:
+                raise ConfigError("--pose odometry excludes --pose-topic and --tf-frames")
+            self.odometry = OdometryPoses(None if self.fixed is None else self.fixed[0])
+            self.fixed = None
+            return
+        if request.pose != "recorded":
+            raise ConfigError(f"--pose is recorded or odometry, got {request.pose!r}")
         if self.fixed is not None:
             if self.tf_frames is not None or self.pose_topic is not None:
                 raise ConfigError("a fixed camera pose excludes --pose-topic and --tf-frames")
@@ -296,7 +239,7 @@ class Replayer:
                 time.sleep(max(0.0, due - (time.monotonic() - start_wall)))
             if m.topic in ("/tf", "/tf_static"):
                 tree.add(m.message)
-                if self.footfall and self.pose_topic is None:
+                if self.footfall and self.pose_topic is None and self.odometry is None:
                     self._publish_tf_pose(bus, m, tree)
             elif m.topic == "/ground_prior" and self.mapping is not None:
                 g = m.message
@@ -318,8 +261,8 @@ class Replayer:
                     camera, centre = self.fixed
                     self._mapping_at(bus, (float(centre.position[0]), float(centre.position[1])))
                     bus.publish(PoseEstimate.TOPIC, PoseEstimate(stamp, camera, centre))
-                elif not self.footfall:
-                    pose = self._pose_at(stamp, times, poses, tree)
+                elif self.odometry is not None or not self.footfall:
+                    pose = self._pose_at(stamp, times, poses, tree, m.message, info)
                     if pose is None:
                         self.counts.frames_without_pose += 1
                         continue
@@ -369,8 +312,18 @@ class Replayer:
         bus.publish(PoseEstimate.TOPIC, PoseEstimate(stamp, camera, body))
 
     def _pose_at(
-        self, stamp: float, times: list[float], poses: list[Pose], tree: TransformTree
+        self,
+        stamp: float,
+        times: list[float],
+        poses: list[Pose],
+        tree: TransformTree,
+        image: Any,
+        info: Any,
     ) -> Pose | None:
+        """The camera's pose for a depth image: odometry's, TF's or the nearest recorded."""
+        if self.odometry is not None:
+            depth, scale = depth_array(image)
+            return self.odometry.pose(depth, _camera(info, self.noise, self.limits), scale, stamp)
         if self.tf_frames is not None:
             if self.history is not None:  # a bag's TF, at the image's time
                 tree = self.history.tree_at(stamp, self.request.max_pose_gap_s)

@@ -20,6 +20,7 @@ import numpy.typing as npt
 from footfall.datasets.tum import TUM_DEPTH_SCALE, load_depth_png, stamped_depth_images
 from footfall.errors import DatasetError
 from footfall.odometry.evaluation import TrajectoryErrors, trajectory_errors
+from footfall.odometry.poses import first_frame_over_floor
 from footfall.odometry.registration import DepthOdometry, OdometryConfig
 from footfall.reports import write_json
 from footfall.sensing.camera import PinholeCamera
@@ -126,49 +127,13 @@ def run_odometry(request: OdometryRequest) -> OdometryReport:
     return OdometryReport(table, cpu_ms, skipped, errors)
 
 
-# The floor of a sequence tracked without poses: the lowest large plane in its first frame
-# within this of the camera's down (a camera held level, or looking down)...
-FLOOR_TILT_DEG = 60.0
-# ...with the camera this high above it [m].
-FLOOR_CAMERA_HEIGHTS_M = (0.05, 3.0)
-
-
-def first_frame_over_floor(depth: npt.NDArray, camera: PinholeCamera, depth_scale: float) -> Pose:
-    """The first camera's pose over the floor it sees: z up, on the floor below it.
-
-    Raises:
-        DatasetError: No floor in view (the error says to give the camera's pose).
-    """
-    import math
-
-    from footfall.pointcloud.ground import CameraOverFloor, find_ground
-
-    points, _ = camera.depth_to_points(depth, depth_scale, stride=4)
-    try:
-        floor = find_ground(
-            points,
-            (0.0, -1.0, 0.0),  # up, for a camera held level: against its image's rows
-            math.radians(FLOOR_TILT_DEG),
-            below_origin=True,
-            height_range_m=FLOOR_CAMERA_HEIGHTS_M,
-        )
-    except DatasetError as exc:
-        raise DatasetError(
-            f"no floor in the first frame to put the odometry's world on ({exc}): give the "
-            "camera's pose over the floor with --camera-height and --camera-pitch-deg"
-        ) from exc
-    over = CameraOverFloor.from_up(floor.normal, floor.offset_m)
-    return Pose(np.array([0.0, 0.0, over.height_m]), over.rotation_camera_to_map)
-
-
 def odometry_over_floor(
     request: OdometryRequest, first_pose: Pose | None = None
 ) -> tuple[dict[float, Pose], OdometryReport]:
     """The camera's pose by depth frame time in a z-up world, from depth odometry.
 
-    The odometry's world is its first frame's optical frame; ``first_pose`` puts that frame
-    over the floor (else the floor is found in it: :func:`first_frame_over_floor`). Frames
-    that did not register are left out: their depth would land at the last good pose.
+    ``first_pose`` puts the first frame over the floor (else the floor is found in it:
+    :mod:`footfall.odometry.poses`). Frames that did not register are left out.
 
     Raises:
         DatasetError, TrackingLostError, ConfigError: As :func:`run_odometry`.

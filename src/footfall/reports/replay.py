@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from footfall.datasets.floor import floor_flatness
-from footfall.recording.replay import Replayer, ReplayRequest
+from footfall.recording.replay import Replayer
+from footfall.recording.replay_request import ReplayRequest
 from footfall.reports.map import MapReport
 
 
@@ -38,7 +39,9 @@ def run_replay(
     metrics: dict[str, object] = {
         "recording": str(request.path),
         "depth_topic": replayer.depth_topic,
-        "pose_source": "fixed camera"
+        "pose_source": "odometry"
+        if replayer.odometry is not None
+        else "fixed camera"
         if replayer.fixed is not None
         else replayer.pose_topic or "tf " + " -> ".join(replayer.tf_frames or ()),
         "depth_images": counts.depth_images,
