@@ -157,6 +157,35 @@ def test_every_planned_height_reaches_every_foot(default_spec, drop, shift):
             assert kin.reachable(int(leg), p, 0.5 * planner.config.reach_margin - 1e-9)
 
 
+def test_a_leg_left_nothing_by_the_legs_placed_before_it_is_placed_first():
+    """Legs are placed one after another, each narrowing the body heights the next may use.
+    A PhantomX's left front foot onto a 4 cm block, its right front foot into a 6 cm pit:
+    placed in spec order (LF first), the block's foothold leaves only heights the pit is
+    out of reach from; placed first, the right front foot's pit leaves the left one a
+    foothold on the block, and every foot is reached at every height the plan allows."""
+    spec = load_spec("phantomx")
+    feet = _standing_feet(spec)
+    x = -1.0 + (np.arange(100) + 0.5) * RES
+    across, along = np.meshgrid(x, x, indexing="ij")
+    heights = np.zeros((100, 100))
+    block, pit = 0.04, 0.06
+    lf, rf = feet[0], feet[5]
+    heights[(abs(across - lf[0]) <= 0.04) & (abs(along - lf[1]) <= 0.04)] = block
+    heights[(abs(across - rf[0]) <= 0.2) & (abs(along - rf[1]) <= 0.2)] = -pit
+    planner = _planner(spec, heights)
+    nominal = feet.copy()
+    nominal[0, 2] += block
+    nominal[5, 2] -= pit
+    body_z = spec.body_height + np.arange(-0.1, 0.10001, 0.005)
+    plan = planner.plan(nominal, FRONT, SUPPORT_AFTER, feet, _poses(), body_z)
+    assert not isinstance(plan, NoFoothold), plan
+    assert plan.targets[5, 2] == pytest.approx(spec.foot_radius - pit)
+    kin = LegKinematics(spec)
+    for z in plan.body_z:
+        for leg in range(6):
+            assert kin.reachable(leg, plan.targets[leg] - [0.0, 0.0, z]), (leg, z)
+
+
 def test_no_map_no_plan(default_spec):
     """Before the camera has seen anything the planner says so."""
     planner = TerrainPlanner(default_spec)

@@ -240,9 +240,6 @@ class TerrainPlanner:
                 f"the body cannot keep {c.min_body_clearance:.2f} m above the terrain under it "
                 f"(it would have to be at {lowest:.3f} m) with every foot in reach"
             )
-        targets = feet.copy()
-        targets[swinging] = nominal[swinging]
-        adjusted = np.zeros(6, dtype=bool)
         least_margin = registration_margin_cells(self.registration_error_m, self._search.resolution)
         # A foothold is reached from the body now (it may stop at any time) to lift-off.
         reach_poses = (poses.now, poses.touchdown, poses.liftoff)
@@ -253,86 +250,108 @@ class TerrainPlanner:
         # Its leg clears the terrain while the foot stands, from touchdown to lift-off.
         stance_poses = (poses.touchdown, midway(poses.touchdown, poses.liftoff), poses.liftoff)
         kin, under, r_link = self.kinematics, self.terrain_under, self.spec.foot_radius
-        for leg in (int(k) for k in np.flatnonzero(swinging)):
 
-            def reached_at(
-                centres: npt.NDArray[np.float64], leg: int = leg
-            ) -> npt.NDArray[np.bool_]:
-                """Heights at which the leg reaches, swings to and stands on each centre."""
-                reach = reach_heights(kin, leg, centres, reach_poses, heights, c.reach_margin)
-                lift = c.swing_clearance + r_link
-                swing_poses = (poses.now, poses.touchdown)
-                reach &= swing_reach_heights(
-                    kin, under, leg, feet[leg], centres, swing_poses, heights, lift
-                )
-                clearance = r_link + c.min_body_clearance
-                return reach & legs_clear_heights(
-                    kin, under, leg, centres, stance_poses, heights, clearance
-                )
+        def place(order: list[int]) -> FootholdPlan | NoFoothold:
+            """Each leg's foothold in turn, each narrowing the body heights the next may use."""
+            targets = feet.copy()
+            targets[swinging] = nominal[swinging]
+            adjusted = np.zeros(6, dtype=bool)
+            allowed_heights = feasible
+            jumps = 0
+            for leg in order:
 
-            def first_accepted(
-                points: npt.NDArray[np.float64],
-                leg: int = leg,
-                allowed: npt.NDArray[np.bool_] = feasible,
-            ) -> int:
-                """The first candidate reached at an allowed height and stable, or -1."""
-                centres = points.copy()
-                centres[:, 2] += r
-                reach = reached_at(centres)
-                for m in np.flatnonzero((allowed & reach).any(axis=1)):
-                    support = targets[support_after].copy()
-                    support[np.flatnonzero(support_after) == leg] = centres[m]
-                    if all(
-                        point_in_polygon_margin((pose.x, pose.y), support[:, :2])
-                        >= c.footholds.stability_margin
-                        for pose in poses.stable
-                    ):
-                        return int(m)
-                return -1
+                def reached_at(
+                    centres: npt.NDArray[np.float64], leg: int = leg
+                ) -> npt.NDArray[np.bool_]:
+                    """Heights at which the leg reaches, swings to and stands on each centre."""
+                    reach = reach_heights(kin, leg, centres, reach_poses, heights, c.reach_margin)
+                    lift = c.swing_clearance + r_link
+                    swing_poses = (poses.now, poses.touchdown)
+                    reach &= swing_reach_heights(
+                        kin, under, leg, feet[leg], centres, swing_poses, heights, lift
+                    )
+                    clearance = r_link + c.min_body_clearance
+                    return reach & legs_clear_heights(
+                        kin, under, leg, centres, stance_poses, heights, clearance
+                    )
 
-            # The body hardly travelling this step (a turn on the spot), a leg with nowhere
-            # to go near its nominal foothold may step where it stands.
-            origins = (nominal[leg, :2], feet[leg, :2]) if in_place else (nominal[leg, :2],)
-            kept = None if previous is None else previous[leg, :2]
-            foothold = None
-            for origin in origins:
-                foothold = self._search.search(
-                    origin,
-                    self.scores,
-                    self.snapshot.heights,
-                    first_accepted=first_accepted,
-                    min_margin_cells=least_margin,
-                    keep_region_at=kept,
-                )
-                if foothold is not None:
-                    break
-            if foothold is None:
-                drift = (
-                    f" at least {least_margin} cells from invalid ones (the map may lie "
-                    f"{self.registration_error_m:.3f} m off)"
-                    if least_margin > c.footholds.min_edge_margin_cells
-                    else ""
-                )
-                return NoFoothold(
-                    f"leg {self.spec.leg_names[leg]}: no valid, reachable and stable cell"
-                    f"{drift} within {c.footholds.search_radius:.2f} m of its nominal foothold "
-                    f"({nominal[leg, 0]:.2f}, {nominal[leg, 1]:.2f}) m",
-                    self.spec.leg_names[leg],
-                )
-            if kept is not None:
-                self.region_jumps += self._search.needless_jump(
-                    origin,
-                    kept,
-                    foothold,
-                    self.scores,
-                    self.snapshot.heights,
-                    least_margin,
-                    first_accepted,
-                )
-            targets[leg] = foothold.position + [0.0, 0.0, r]
-            feasible = feasible & reached_at(targets[leg][None])[0]
-            adjusted[leg] = foothold.moved > 1e-9
-        return FootholdPlan(targets, nominal.copy(), adjusted, heights[feasible])
+                def first_accepted(
+                    points: npt.NDArray[np.float64],
+                    leg: int = leg,
+                    allowed: npt.NDArray[np.bool_] = allowed_heights,
+                ) -> int:
+                    """The first candidate reached at an allowed height and stable, or -1."""
+                    centres = points.copy()
+                    centres[:, 2] += r
+                    reach = reached_at(centres)
+                    for m in np.flatnonzero((allowed & reach).any(axis=1)):
+                        support = targets[support_after].copy()
+                        support[np.flatnonzero(support_after) == leg] = centres[m]
+                        if all(
+                            point_in_polygon_margin((pose.x, pose.y), support[:, :2])
+                            >= c.footholds.stability_margin
+                            for pose in poses.stable
+                        ):
+                            return int(m)
+                    return -1
+
+                # The body hardly travelling this step (a turn on the spot), a leg with nowhere
+                # to go near its nominal foothold may step where it stands.
+                origins = (nominal[leg, :2], feet[leg, :2]) if in_place else (nominal[leg, :2],)
+                kept = None if previous is None else previous[leg, :2]
+                foothold = None
+                for origin in origins:
+                    foothold = self._search.search(
+                        origin,
+                        self.scores,
+                        self.snapshot.heights,
+                        first_accepted=first_accepted,
+                        min_margin_cells=least_margin,
+                        keep_region_at=kept,
+                    )
+                    if foothold is not None:
+                        break
+                if foothold is None:
+                    drift = (
+                        f" at least {least_margin} cells from invalid ones (the map may lie "
+                        f"{self.registration_error_m:.3f} m off)"
+                        if least_margin > c.footholds.min_edge_margin_cells
+                        else ""
+                    )
+                    return NoFoothold(
+                        f"leg {self.spec.leg_names[leg]}: no valid, reachable and stable cell"
+                        f"{drift} within {c.footholds.search_radius:.2f} m of its nominal foothold "
+                        f"({nominal[leg, 0]:.2f}, {nominal[leg, 1]:.2f}) m",
+                        self.spec.leg_names[leg],
+                    )
+                if kept is not None:
+                    jumps += self._search.needless_jump(
+                        origin,
+                        kept,
+                        foothold,
+                        self.scores,
+                        self.snapshot.heights,
+                        least_margin,
+                        first_accepted,
+                    )
+                targets[leg] = foothold.position + [0.0, 0.0, r]
+                allowed_heights = allowed_heights & reached_at(targets[leg][None])[0]
+                adjusted[leg] = foothold.moved > 1e-9
+            self.region_jumps += jumps  # counted for the plan kept only
+            return FootholdPlan(targets, nominal.copy(), adjusted, heights[allowed_heights])
+
+        order = [int(k) for k in np.flatnonzero(swinging)]
+        plan = place(order)
+        if isinstance(plan, NoFoothold) and plan.leg in self.spec.leg_names:
+            # A leg placed after the others may find nothing at the body heights and beside
+            # the support they left it (the last in spec order is a front leg, stepping onto
+            # the ground the others have not reached yet); placed first, it may.
+            first = self.spec.leg_names.index(plan.leg)
+            if first != order[0]:
+                again = place([first, *(leg for leg in order if leg != first)])
+                if isinstance(again, FootholdPlan):
+                    return again
+        return plan
 
     def _stance_heights(
         self,
