@@ -105,6 +105,38 @@ def reach_heights(
     return ok
 
 
+def stance_heights(
+    kin: LegKinematics,
+    feet: npt.NDArray[np.float64],
+    stance: npt.NDArray[np.bool_],
+    poses: tuple[PlanarPose, PlanarPose],
+    heights: npt.NDArray[np.float64],
+    reach_margin: float,
+) -> npt.NDArray[np.bool_]:
+    """Body heights at which every supporting foot stays reached from now until touchdown.
+
+    Only the pose now is binding when no height serves both (the stroke governor then slows
+    the body down so the feet stay reached), and then without a margin.
+
+    Args:
+        kin: The legs' kinematics.
+        feet: Every foot's position, world frame, shape (6, 3) [m].
+        stance: Which feet support the body.
+        poses: The body now and at touchdown.
+        heights: Body heights to test, shape (H,) [m].
+        reach_margin: The planner's; the feet keep half of it, as the stroke governor does [m].
+    """
+    legs = np.flatnonzero(stance)
+    ok = np.zeros(len(heights), dtype=bool)
+    for pose_set, margin in ((poses, 0.5 * reach_margin), (poses[:1], 0.0)):
+        ok = np.ones(len(heights), dtype=bool)
+        for leg in legs:
+            ok &= reach_heights(kin, int(leg), feet[leg], pose_set, heights, margin)
+        if ok.any():
+            break
+    return ok
+
+
 def swing_reach_heights(
     kinematics: LegKinematics,
     terrain_under: Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float64]],

@@ -28,6 +28,7 @@ from footfall.planning.leg_clearance import (
     legs_clear_heights,
     midway,
     reach_heights,
+    stance_heights,
     swing_reach_heights,
 )
 from footfall.robot.kinematics import LegKinematics
@@ -228,7 +229,9 @@ class TerrainPlanner:
         c = self.config
         r = self.spec.foot_radius
         heights = np.sort(np.atleast_1d(np.asarray(body_z, dtype=np.float64)))
-        feasible = self._stance_heights(feet, ~swinging, poses, heights)
+        feasible = stance_heights(
+            self.kinematics, feet, ~swinging, (poses.now, poses.touchdown), heights, c.reach_margin
+        )
         if not feasible.any():
             return NoFoothold(
                 "the supporting feet are out of reach at every body height the body can take"
@@ -352,29 +355,6 @@ class TerrainPlanner:
                 if isinstance(again, FootholdPlan):
                     return again
         return plan
-
-    def _stance_heights(
-        self,
-        feet: npt.NDArray[np.float64],
-        stance: npt.NDArray[np.bool_],
-        poses: StepPoses,
-        heights: npt.NDArray[np.float64],
-    ) -> npt.NDArray[np.bool_]:
-        """Body heights at which every supporting foot stays reached until touchdown.
-
-        Only the pose now is binding when no height serves both (the stroke governor then
-        slows the body down so the feet stay reached), and then without a margin.
-        """
-        legs = np.flatnonzero(stance)
-        margin = 0.5 * self.config.reach_margin  # as the stroke governor's
-        ok = np.zeros(len(heights), dtype=bool)
-        for pose_set, m in (((poses.now, poses.touchdown), margin), ((poses.now,), 0.0)):
-            ok = np.ones(len(heights), dtype=bool)
-            for leg in legs:
-                ok &= reach_heights(self.kinematics, int(leg), feet[leg], pose_set, heights, m)
-            if ok.any():
-                break
-        return ok
 
     # Floor height -------------------------------------------------------------------------
     def floor_height(
