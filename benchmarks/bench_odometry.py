@@ -9,8 +9,12 @@ living room, converted), the camera is tracked by
   library's frame-to-frame example), on the same thinned points;
 - ``small_gicp f2m``: small_gicp's VGICP against one incremental voxel map of the past
   frames (its odometry example), from the last pose, on the same points;
+- ``opencv depth``: OpenCV's depth odometry (``cv.Odometry``, ICP on the depth image
+  pyramid, frame to frame, its defaults), on the whole depth image, where
+  ``opencv-contrib-python-headless`` is installed (the dev group has it);
 
-all in this run, one thread each, on the same back-projected points (every second pixel).
+all in this run, one thread each (small_gicp's; OpenCV's limited by ``cv.setNumThreads``),
+the point-based ones on the same back-projected points (every second pixel).
 Reported per method: ATE RMSE after SE(3) alignment [mm] and CPU ms per frame. Run with
 ``uv run python benchmarks/bench_odometry.py [SEQUENCE FX FY CX CY ...]``; it prints the
 table and writes ``benchmarks/results/odometry.json``.
@@ -18,6 +22,7 @@ table and writes ``benchmarks/results/odometry.json``.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import sys
 import tempfile
@@ -94,6 +99,28 @@ def track_small_gicp(frames: list, camera: PinholeCamera, to_map: bool) -> tuple
     return rows, cpu
 
 
+def track_opencv(frames: list, camera: PinholeCamera) -> tuple[list, list[float]]:
+    """OpenCV's depth odometry, frame to frame, on whole images in metres."""
+    import cv2
+
+    cv2.setNumThreads(1)
+    settings = cv2.OdometrySettings()
+    settings.setCameraMatrix(camera.matrix.astype(np.float32))
+    odometry = cv2.Odometry(cv2.OdometryType_DEPTH, settings, cv2.OdometryAlgoType_COMMON)
+    pose, rows, cpu, previous = np.eye(4), [], [], None
+    for stamp, depth in frames:
+        start = time.process_time()
+        metres = (depth * TUM_DEPTH_SCALE).astype(np.float32)
+        if previous is not None:
+            found, motion = odometry.compute(previous, metres)  # motion @ previous = this
+            if found:
+                pose = pose @ np.linalg.inv(motion)
+        previous = metres
+        cpu.append(1000.0 * (time.process_time() - start))
+        rows.append(row(stamp, pose))
+    return rows, cpu
+
+
 def measure(sequence: Path, intrinsics: tuple[float, ...]) -> dict[str, dict[str, float]]:
     """Every method on one sequence: ATE [mm] and CPU ms per frame."""
     frames, camera = frames_of(sequence, intrinsics)
@@ -103,6 +130,8 @@ def measure(sequence: Path, intrinsics: tuple[float, ...]) -> dict[str, dict[str
         "small_gicp f2f": lambda: track_small_gicp(frames, camera, to_map=False),
         "small_gicp f2m": lambda: track_small_gicp(frames, camera, to_map=True),
     }
+    if importlib.util.find_spec("cv2") is not None:
+        methods["opencv depth"] = lambda: track_opencv(frames, camera)
     out = {}
     for name, track in methods.items():
         rows, cpu = track()
