@@ -134,8 +134,12 @@ def test_a_client_in_another_process_walks_the_robot_across_the_stairs(tmp_path)
     figures = {t: f"{rate[t] / 1e3:.1f} kB/s at {hz[t]:.1f} Hz" for t in sorted(rate)}
     assert sum(rate.values()) < 1.5e6, figures
     assert hz["map"] >= 5.0 and hz["depth"] >= 5.0, figures
-    # Nobody acknowledged (the client hears no image or map): nothing was held back.
-    assert metrics["link"]["sent"]["map"] > 50 and metrics["link"]["dropped"] == {}
+    # The client acknowledges what it hears, so the sender keeps to a window: on loopback it
+    # rarely closes (only while the client, busy steering, falls behind by a few tenths of a
+    # second), and then a newer image replaces a waiting one. Nearly everything goes.
+    link = metrics["link"]
+    assert link["sent"]["map"] > 50 and link["sent"]["depth"] > 50, link
+    assert sum(link["dropped"].values()) <= 0.05 * sum(link["sent"].values()), link
     # The client's commands carry its own clock, not the wall's: no latency is claimed.
     assert metrics["command_latency_ms"] is None
     from collections import Counter
