@@ -38,9 +38,9 @@ def _defaults() -> list[tuple[str, object]]:
     job = prepare_walk(WalkRequest(terrain="flat"))
     out = _scalar_fields("robot", job.spec) + _scalar_fields("gait", job.settings.gait)
     for section, attribute in SECTIONS.items():
-        if attribute is not None:
+        if attribute:
             out += _scalar_fields(section, getattr(job.settings, attribute))
-    return out
+    return [*out, ("walk.pose_source", job.settings.pose_source)]
 
 
 DEFAULTS = _defaults()
@@ -101,6 +101,7 @@ def test_values_reach_the_walk_where_they_are_named():
         ("robot.limits.femur=1", "A:B"),
         ("robot.mounts=1:2", "LegMount"),
         ("gait.kind=wave", "--gait"),
+        ("walk.seconds=3", "pose_source"),
         ("scoring.threshold", "NAME=VALUE"),
         ("scoring.threshold=0.4,", "missing"),
         ("scoring.threshold=0.4,0.4", "twice"),
@@ -119,6 +120,8 @@ def test_the_dataclass_checks_every_value():
         prepare_walk(WalkRequest(overrides=(("scoring.threshold", -1.0),)))
     with pytest.raises(ConfigError, match=r"cannot stand at body height 0\.5"):
         prepare_walk(WalkRequest(overrides=(("robot.body_height", 0.5),)))
+    with pytest.raises(ConfigError, match="unknown pose source 'slam'"):
+        prepare_walk(WalkRequest(overrides=(("walk.pose_source", "slam"),)))
 
 
 def test_combinations_are_the_product_first_option_outermost():
@@ -181,3 +184,21 @@ def test_bench_terrain_compares_every_combination(tmp_path, monkeypatch, capsys)
         assert main([*args[:-1], bad, "--out", str(failed)]) == 2
         assert named in capsys.readouterr().out
         assert not failed.exists()
+
+
+def test_bench_terrain_compares_pose_sources(tmp_path, monkeypatch):
+    """`--pose sim,estimator`: each pose source a row dimension, as the setting it stands for;
+    the estimator's rows give its drift per metre walked, the truth's do not."""
+    from footfall.sim.terrain import Stairs
+
+    monkeypatch.setattr(Stairs, "sweep", (0.04,))
+    out = tmp_path / "poses"
+    args = ["bench", "terrain", "--seeds", "1", "--seconds", "4", "--modes", "planned"]
+    args += ["--terrains", "stairs", "--pose", "sim,estimator", "--out", str(out)]
+    assert main(args) == 0
+    bench = json.loads((out / "bench.json").read_text())
+    rows = {r["settings"]["walk.pose_source"]: r for r in bench["results"]}
+    assert sorted(rows) == ["estimator", "sim"]
+    assert "median_estimator_drift_per_m" not in rows["sim"]
+    assert 0.0 <= rows["estimator"]["median_estimator_drift_per_m"] < 0.05
+    assert 0.0 <= rows["estimator"]["median_estimator_heading_drift_deg_per_m"] < 2.0

@@ -117,6 +117,15 @@ def add_walking_suites(kinds: argparse._SubParsersAction) -> None:
         suite.add_argument(
             "--gait", type=comma_list, default=["tripod"], metavar="GAIT,...", help=gaits
         )
+        suite.add_argument(
+            "--pose",
+            type=comma_list,
+            default=None,
+            metavar="POSE,...",
+            help="pose sources every variant walks with (sim, the simulator's truth; estimator, "
+            "footfall's own from the legs and the IMU; each a row dimension, as --set "
+            "walk.pose_source=...) [default: sim]",
+        )
         suite.add_argument("--cluster", metavar="ADDRESS|auto", default=None, help=cluster)
         suite.add_argument(
             "--set",
@@ -158,8 +167,15 @@ def _walking(args: argparse.Namespace, on_run: Callable[[str], None]) -> dict[st
         "robots": args.robot,
         "gaits": args.gait,
         "cluster": args.cluster,
-        "sets": args.sets,
+        "sets": _sets(args),
     }
+
+
+def _sets(args: argparse.Namespace) -> list[str] | None:
+    """The ``--set`` options, with ``--pose`` as the setting it stands for."""
+    if args.pose is None:
+        return args.sets
+    return [*(args.sets or []), f"walk.pose_source={','.join(args.pose)}"]
 
 
 def run_terrain(args: argparse.Namespace, console: Console) -> int:
@@ -168,7 +184,7 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
     from footfall.reliability.variants import parse_variants, variant_lines
     from footfall.reports.bench import run_terrain_bench
 
-    variants = parse_variants(args.robot, args.gait, args.sets)
+    variants = parse_variants(args.robot, args.gait, _sets(args))
     with count_progress(console, "walks") as progress:
         total = terrain_benchmark_runs(max(args.seeds, 0), args.terrains, args.modes, len(variants))
         task = progress.add_task("walking", total=total)
@@ -223,7 +239,7 @@ def run_faults(args: argparse.Namespace, console: Console) -> int:
 
     faults = parse_fault_classes(args.faults) if args.faults else FAULT_CLASSES
     terrains = tuple(args.terrains) if args.terrains else FAULT_TERRAINS
-    variants = parse_variants(args.robot, args.gait, args.sets)
+    variants = parse_variants(args.robot, args.gait, _sets(args))
     with count_progress(console, "runs") as progress:
         task = progress.add_task(
             "walking", total=fault_benchmark_runs(max(args.seeds, 0), faults, terrains, variants)

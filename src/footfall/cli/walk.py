@@ -11,6 +11,7 @@ from footfall.cli.commands import summary
 from footfall.cli.common import (
     add_recording_options,
     format_value,
+    key_values,
     print_table,
     sim_progress,
     wrote,
@@ -40,11 +41,15 @@ SUMMARY = (
     ("footholds adjusted", "footholds_adjusted", "{}"),
     ("min swing clearance", "min_clearance_m", "{:.4f} m"),
     ("real-time factor", "realtime_factor", "{:.1f}x"),
+    ("estimator distance", "estimator_distance_m", "{:.3f} m"),
+    ("estimator position drift", "estimator_position_drift_m", "{:.4f} m"),
+    ("estimator heading drift", "estimator_heading_drift_deg", "{:.2f} deg"),
 )
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Add ``walk``."""
+    from footfall.nodes.sources import POSES
     from footfall.sim.terrains import TERRAINS, difficulty_parameters
 
     p = subparsers.add_parser(
@@ -164,6 +169,22 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument(
+        "--pose",
+        choices=POSES.names(),
+        default="sim",
+        help="the pose source placing the camera's images: sim (the simulator's truth), "
+        "estimator (footfall's own, from the legs and the IMU, which read as a real robot's; "
+        "metrics.json gains estimator_position_drift_m, estimator_heading_drift_deg and "
+        "estimator_distance_m), or one you registered",
+    )
+    p.add_argument(
+        "--pose-option",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a setting for the pose source (estimator: noise=realistic|none, seed=N); repeatable",
+    )
+    p.add_argument(
         "--servo-bus",
         choices=("protocol1", "protocol2"),
         help=(
@@ -235,6 +256,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
             faults=args.faults,
             backend=backend,
             backend_options=options,
+            pose=args.pose,
+            pose_options=key_values("--pose-option", args.pose_option),
             overrides=walk_settings(args.sets),
         )
     )

@@ -27,6 +27,7 @@ from footfall.registry import Registry
 
 if TYPE_CHECKING:  # the robot's parser lists the sources without loading the bus
     from footfall.backends import HexapodBackend
+    from footfall.robot.spec import HexapodSpec
     from footfall.runtime.bus import Bus
     from footfall.runtime.node_thread import NodeThread
 
@@ -49,6 +50,8 @@ class SourceSetup:
             ``thread_bus`` from there, and the pose source answers it there. None: no
             such thread (a simulated walk, repeatable to the bit).
         thread_bus: That thread's bus.
+        spec: The robot (an estimator's leg kinematics), when known.
+        seed: The run's seed, for a simulated sensor's noise.
     """
 
     bus: Bus
@@ -60,6 +63,8 @@ class SourceSetup:
     options: dict[str, str] = field(default_factory=dict)
     thread: NodeThread | None = None
     thread_bus: Bus | None = None
+    spec: HexapodSpec | None = None
+    seed: int = 0
 
 
 class CameraSource(Protocol):
@@ -125,3 +130,4 @@ CAMERAS.register("network", "footfall.nodes.network_sources:NetworkCamera")
 POSES.register("network", "footfall.nodes.network_sources:NetworkPose")
 CAMERAS.register("realsense", "footfall.hardware.realsense_camera:RealSenseCamera")
 POSES.register("trajectory", "footfall.nodes.trajectory_pose:TrajectoryPose")
+POSES.register("estimator", "footfall.nodes.estimator_pose:EstimatorPose")

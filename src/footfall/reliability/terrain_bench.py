@@ -115,7 +115,16 @@ def _terrain_run(job: Job) -> dict[str, object]:
     def replan_ms(value: float | None) -> float:
         return float("nan") if value is None else float(value)
 
+    estimator = {}
+    if m.estimator is not None:  # footfall's own pose: its error per metre walked
+        walked = max(m.gait.distance_m, 1e-9)
+        estimator = {
+            "estimator_drift_per_m": m.estimator["estimator_position_drift_m"] / walked,
+            "estimator_heading_drift_deg_per_m": m.estimator["estimator_heading_drift_deg"]
+            / walked,
+        }
     return {
+        **estimator,
         "success": success,
         "fell": m.fell,
         "invalid_footholds": invalid,
@@ -134,16 +143,24 @@ def _terrain_run(job: Job) -> dict[str, object]:
 
 
 def _walking_medians(outcomes: Sequence[dict]) -> dict[str, float]:
-    """Medians over walks: the largest tilt, the mean speed and the largest stance slip."""
+    """Medians over walks: the largest tilt, the mean speed and the largest stance slip.
+
+    With footfall's own pose (``--pose estimator``) also its position and heading drift per
+    metre walked.
+    """
 
     def median(key: str) -> float:
         return float(np.median([o[key] for o in outcomes])) if outcomes else float("nan")
 
-    return {
+    medians = {
         "median_tilt_max_deg": median("tilt_max_deg"),
         "median_speed_mps": median("mean_speed_mps"),
         "median_stance_slip_max_m": median("stance_slip_max_m"),
     }
+    for key in ("estimator_drift_per_m", "estimator_heading_drift_deg_per_m"):
+        if outcomes and all(key in o for o in outcomes):
+            medians[f"median_{key}"] = median(key)
+    return medians
 
 
 def run_terrain_benchmark(

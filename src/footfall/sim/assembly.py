@@ -24,7 +24,7 @@ from footfall.metrics import walk_metrics
 from footfall.motion.walker import WalkController
 from footfall.nodes.mapping import MappingNode
 from footfall.nodes.pose_guard import PoseGuardNode
-from footfall.nodes.sources import CAMERAS, POSES, CameraSource, SourceSetup
+from footfall.nodes.sources import CAMERAS, POSES, CameraSource, PoseSource, SourceSetup
 from footfall.planning.terrain_planner import TerrainPlanner
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
@@ -33,10 +33,11 @@ from footfall.runtime.cpu_meter import CpuMeter, MeteredBus
 from footfall.runtime.faults import FaultyLink
 from footfall.runtime.node_thread import NodeThread
 from footfall.runtime.scheduler import WallClockScheduler
+from footfall.sensing.pose import Pose
 from footfall.sim.model import CameraMount
 from footfall.sim.task import TerrainTask
 from footfall.sim.terrain import Terrain
-from footfall.sim.truth import FootholdMetrics, TrueScores, foothold_metrics
+from footfall.sim.truth import judge_footholds
 from footfall.sim.walk_metrics import (
     MappingMetrics,
     NoWalk,
@@ -64,14 +65,15 @@ def open_sources(
     thread: NodeThread | None,
     color: bool,
     color_hz: float | None,
-) -> tuple[CameraSource, str]:
+    spec: HexapodSpec | None = None,
+) -> tuple[CameraSource, PoseSource, str]:
     """The camera and pose source the settings name, publishing on ``sensors``.
 
     ``mount`` is the settings' camera placed on the robot (:meth:`CameraMount.on`).
 
     A camera may take ``thread`` for its heavy work; its pose source then answers it on
-    that thread. Returns the camera and its name on ``meter`` (the simulator's own sources
-    are charged as the simulator's: ``sim_camera``, ``sim_pose``).
+    that thread. Returns the camera, the pose source and the camera's name on ``meter`` (the
+    simulator's own sources are charged as the simulator's: ``sim_camera``, ``sim_pose``).
     """
     camera_node = ("sim_" if settings.camera_source == "sim" else "") + "camera"
     pose_node = ("sim_" if settings.pose_source == "sim" else "") + "pose"
@@ -88,16 +90,18 @@ def open_sources(
         )
     )
     on_thread = thread is not None and getattr(camera, "thread", None) is thread
-    POSES.get(settings.pose_source).open(
+    pose = POSES.get(settings.pose_source).open(
         SourceSetup(
             MeteredBus(thread.bus if on_thread else sensors, meter, pose_node),
             backend,
             mount,
             camera=camera,
             options=dict(settings.pose_options),
+            spec=spec,
+            seed=settings.seed,
         )
     )
-    return camera, camera_node
+    return camera, pose, camera_node
 
 
 @dataclass
@@ -130,6 +134,7 @@ class WalkingRobot:
             simulator's rendered camera).
         perception_thread: The thread the camera's render, the pose source and the mapping
             node run on, when not the control loop's.
+        pose_source: The pose source (planned walking), else None.
     """
 
     spec: HexapodSpec
@@ -148,6 +153,7 @@ class WalkingRobot:
     meter: CpuMeter = field(default_factory=CpuMeter)
     camera_node: str = "camera"
     perception_thread: NodeThread | None = None
+    pose_source: PoseSource | None = None
 
     @classmethod
     def build(
@@ -183,7 +189,7 @@ class WalkingRobot:
         setup = BackendSetup(spec, height, terrain, camera_mount, dict(settings.backend_options))
         backend = BACKENDS.get(settings.backend).open(setup)
         backend.advance(settings.settle_seconds)
-        planner = camera = mapping = guard = thread = None
+        planner = camera = pose_source = mapping = guard = thread = None
         camera_node = "camera"
         link = FaultyLink(bus, settings.faults, settings.seed) if settings.faults.active else None
         if not settings.blind:
@@ -206,8 +212,8 @@ class WalkingRobot:
             # Injected faults stand between the sensors and the rest, on the control loop.
             offered = thread if link is None else None
             assert camera_mount is not None
-            camera, camera_node = open_sources(
-                settings, camera_mount, backend, sensors, meter, offered, color, color_hz
+            camera, pose_source, camera_node = open_sources(
+                settings, camera_mount, backend, sensors, meter, offered, color, color_hz, spec
             )
             guard = PoseGuardNode(MeteredBus(bus, meter, "pose_guard"))
             if hasattr(backend, "attitude") and backend.attitude is None:
@@ -249,6 +255,7 @@ class WalkingRobot:
             meter=meter,
             camera_node=camera_node,
             perception_thread=thread.start() if thread is not None else None,
+            pose_source=pose_source,
         )
 
     def step(self, t: float, dt: float) -> None:
@@ -313,7 +320,9 @@ class WalkingRobot:
         goal = task.goal
         metrics = WalkMetrics(
             gait=gait,
-            footholds=self._judge_footholds(log, goal),
+            footholds=judge_footholds(
+                log, terrain, settings.map.resolution, settings.score, spec.foot_radius, goal
+            ),
             outcome=WalkOutcome(
                 reached_goal=bool(task.at_goal(final) and not gait.fell),
                 goal_distance_m=float(np.linalg.norm(goal - final)),
@@ -337,6 +346,10 @@ class WalkingRobot:
         bus = getattr(self.backend, "bus_metrics", None)
         if callable(bus):
             metrics.servo_bus = bus()
+        drift, truth = getattr(self.pose_source, "drift", None), self.backend.read()
+        if callable(drift) and truth.position_body_in_world is not None:
+            body = Pose(truth.position_body_in_world, truth.orientation_body_in_world)
+            metrics.estimator = drift(body)
         if self.mapping is not None and self.camera is not None:
             metrics.mapping = MappingMetrics(
                 frames=self.mapping.frames,
@@ -363,26 +376,6 @@ class WalkingRobot:
             touchdowns=list(controller.touchdowns),
             scores=self.mapping.scores if self.mapping is not None else None,
         )
-
-    def _judge_footholds(self, log: WalkLog, goal: np.ndarray) -> FootholdMetrics:
-        """The footholds against the terrain's truth, on a grid that covers where they went.
-
-        Unjudged when the robot does not know where its feet are.
-        """
-        feet = log.array("feet_in_world")[..., :2].reshape(-1, 2)
-        if not np.isfinite(feet).all():
-            return FootholdMetrics.unjudged(log)
-        low = np.minimum(feet.min(axis=0), goal) - 0.5
-        high = np.maximum(feet.max(axis=0), goal) + 0.5
-        extent = (
-            min(-1.0, float(low[0])),
-            max(float(goal[0]) + 1.0, float(high[0])),
-            min(-1.5, float(low[1])),
-            max(1.5, float(high[1])),
-        )
-        s = self.settings
-        truth = TrueScores(self.terrain, s.map.resolution, s.score, extent)
-        return foothold_metrics(log, self.terrain, truth, self.spec.foot_radius)
 
     def _robustness(self, log: WalkLog) -> Robustness:
         """Freezes, stale stops, pose corrections and jumps, and what injected faults did."""

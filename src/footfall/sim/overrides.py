@@ -17,6 +17,9 @@ section                 configuration
                         ``planner.footholds.search_radius``
 ``navigation``          :class:`~footfall.planning.navigation.NavigationConfig`
 ``feedback``            :class:`~footfall.motion.feedback.FeedbackConfig`
+``walk``                the walk itself (:class:`~footfall.sim.walk_settings.WalkSettings`),
+                        of which only ``walk.pose_source`` (the pose source by name: a
+                        benchmark's ``--pose``); its other fields have options of their own
 ======================  ==================================================================
 
 Values are read by the field's type: numbers (finite), ``true``/``false``, names, an enum's
@@ -50,7 +53,10 @@ SECTIONS = {
     "planner": "planner",
     "navigation": "navigation",
     "feedback": "feedback",
+    "walk": "",  # the walk's settings themselves
 }
+# The walk's own fields that are set by name.
+WALK_FIELDS = ("pose_source",)
 # Fields with options of their own, which say what the walk is rather than tune it.
 OWN_OPTIONS = {"gait.kind": "--gait"}
 
@@ -68,7 +74,7 @@ def _section_defaults() -> dict[str, object]:
     defaults: dict[str, object] = {"robot": load_spec("default"), "gait": GaitConfig()}
     for section, attribute in SECTIONS.items():
         if attribute is not None:
-            defaults[section] = getattr(walk, attribute)
+            defaults[section] = getattr(walk, attribute) if attribute else walk
     return defaults
 
 
@@ -154,6 +160,11 @@ def _resolve(name: str, defaults: dict[str, object]) -> tuple[object, Any]:
         )
     if name in OWN_OPTIONS:
         raise ConfigError(f"--set {name}: walk another one with {OWN_OPTIONS[name]}")
+    if section == "walk" and path and path not in WALK_FIELDS:
+        raise ConfigError(
+            f"--set {name}: of the walk's own settings only {', '.join(WALK_FIELDS)} is set "
+            "by name; the others have options of their own"
+        )
     owner = defaults[section]
     parts = path.split(".") if path else []
     if not parts:
@@ -258,12 +269,12 @@ def apply_settings(instance: D, section: str, settings: Sequence[Setting]) -> D:
 
 
 def apply_walk_settings(settings: D, chosen: Sequence[Setting]) -> D:
-    """A walk's settings with the scoring, mapping, planner, navigation and feedback set."""
+    """A walk's settings with its sections' fields and its own (``walk.*``) set."""
     for section, attribute in SECTIONS.items():
-        if attribute is not None:
+        if attribute:
             part = apply_settings(getattr(settings, attribute), section, chosen)
             settings = dataclasses.replace(settings, **{attribute: part})  # type: ignore[type-var]
-    return settings
+    return apply_settings(settings, "walk", chosen)
 
 
 def as_json(value: object) -> object:

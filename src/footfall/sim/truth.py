@@ -140,3 +140,31 @@ def foothold_metrics(
         invalid_footholds=invalid,
         min_clearance_m=clearance if np.isfinite(clearance) else float("nan"),
     )
+
+
+def judge_footholds(
+    log: WalkLog,
+    terrain: Terrain,
+    resolution: float,
+    score: ScoreConfig,
+    foot_radius: float,
+    goal: npt.NDArray[np.float64],
+) -> FootholdMetrics:
+    """A walk's footholds against the terrain's truth.
+
+    The truth is scored at the map's ``resolution`` [m] on a grid that covers where the feet
+    went and the ``goal``. Unjudged when the robot does not know where its feet are.
+    """
+    feet = log.array("feet_in_world")[..., :2].reshape(-1, 2)
+    if not np.isfinite(feet).all():
+        return FootholdMetrics.unjudged(log)
+    low = np.minimum(feet.min(axis=0), goal) - 0.5
+    high = np.maximum(feet.max(axis=0), goal) + 0.5
+    extent = (
+        min(-1.0, float(low[0])),
+        max(float(goal[0]) + 1.0, float(high[0])),
+        min(-1.5, float(low[1])),
+        max(1.5, float(high[1])),
+    )
+    truth = TrueScores(terrain, resolution, score, extent)
+    return foothold_metrics(log, terrain, truth, foot_radius)

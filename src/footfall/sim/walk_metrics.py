@@ -264,6 +264,8 @@ class WalkMetrics:
         nodes: Per node: CPU seconds, share of one core per second walked, calls, median
             and 95th percentile latency [ms] (the simulator's names start with ``sim``),
             else None.
+        estimator: The estimator's error against the truth at the end (``--pose
+            estimator``, :meth:`~footfall.nodes.estimator_pose.EstimatorPose.drift`), else None.
     """
 
     gait: GaitMetrics
@@ -279,6 +281,7 @@ class WalkMetrics:
     bridge: BridgeTraffic | None = None
     servo_bus: ServoBusMetrics | None = None
     nodes: dict[str, dict[str, float]] | None = None
+    estimator: dict[str, float] | None = None
 
     @property
     def fell(self) -> bool:
@@ -308,6 +311,8 @@ class WalkMetrics:
             out.update(asdict(self.bridge))
         if self.servo_bus is not None:
             out["servo_bus"] = asdict(self.servo_bus)
+        if self.estimator is not None:
+            out.update(self.estimator)
         if self.nodes is not None:
             out["cpu_per_node"] = {name: n["cpu_s"] for name, n in self.nodes.items()}
             own = sum(n["cpu_s"] for name, n in self.nodes.items() if not name.startswith("sim"))
