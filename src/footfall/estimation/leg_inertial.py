@@ -77,7 +77,7 @@ class EstimatorConfig:
 
     tilt_time_s: float = 0.5
     bias_time_s: float = 1.0
-    calibration_s: float = 1.0
+    calibration_s: float = 2.0
     still_joint_rate: float = 0.05
     still_rate: float = 0.05
     slip_tolerance_m: float = 0.003
@@ -149,7 +149,8 @@ class LegInertialEstimator:
     ) -> None:
         self.kinematics = kinematics
         self.config = config or EstimatorConfig()
-        self.pose = start
+        self.position = np.array(start.position, dtype=np.float64)
+        self.rotation_matrix = start.rotation.as_matrix()
         self.covariance = np.zeros(6)
         self.covariance[3:5] = self.config.tilt_sigma**2
         self.bias = np.zeros(3)
@@ -159,14 +160,20 @@ class LegInertialEstimator:
         self._still_s = 0.0
         self._still_readings = 0
         self._up_sums = np.zeros((2, 3))  # the IMU's and the feet's up, summed while calibrating
-        self._tilt_offset: Rotation | None = None
+        self._tilt_offset: npt.NDArray[np.float64] | None = None
         self._heading_s = 0.0
         self._unsupported_s = 0.0
         self._velocity = np.zeros(3)
-        self._distance_anchor = start.position
+        self._distance_anchor = self.position.copy()
         self._last: BodyReading | None = None
         self._feet_in_body: npt.NDArray[np.float64] | None = None
-        self._tibias: Rotation | None = None
+        self._tibias: npt.NDArray[np.float64] | None = None
+        self._mount_yaws = np.asarray(kinematics.spec.mount_yaws, dtype=np.float64)
+
+    @property
+    def pose(self) -> Pose:
+        """The newest estimate of the body in the world."""
+        return Pose(self.position.copy(), Rotation.from_matrix(self.rotation_matrix))
 
     @property
     def calibrated(self) -> bool:
@@ -178,56 +185,46 @@ class LegInertialEstimator:
         """True when the pose may be used: calibrated and not lost."""
         return self.calibrated and self.lost is None
 
-    def update(self, reading: BodyReading) -> Pose:
-        """Take one tick's reading; the body's pose now."""
+    def update(self, reading: BodyReading) -> None:
+        """Take one tick's reading (``position`` and ``rotation_matrix`` follow it)."""
         c = self.config
-        feet = self.kinematics.forward_in_body(reading.joint_positions)
+        angles = np.asarray(reading.joint_positions, dtype=np.float64)
+        feet = self.kinematics.forward_in_body(angles)
         last, self._last = self._last, reading
         last_feet, self._feet_in_body = self._feet_in_body, feet
-        last_tibias, self._tibias = self._tibias, self._tibias_in_body(reading.joint_positions)
-        if last is None or self.lost is not None:
-            if last is None:
-                self.pose = Pose(self.pose.position, self._level(reading.attitude_body_in_world))
-            return self.pose
+        last_tibias, self._tibias = self._tibias, self._tibias_in_body(angles)
+        # The IMU's up in the body frame: the last row of its attitude's matrix.
+        up_imu = reading.attitude_body_in_world.as_matrix()[2]
+        if last is None:
+            self.rotation_matrix = _level(self.rotation_matrix, up_imu)
+            return
         dt = reading.stamp - last.stamp
-        if dt <= 0.0:
-            return self.pose
+        if dt <= 0.0 or self.lost is not None:
+            return
         gyro = np.asarray(reading.angular_velocity_body_in_body, dtype=np.float64)
-        still = (
+        if (
             bool(np.all(reading.standing))
             and float(np.max(np.abs(reading.joint_velocities))) < c.still_joint_rate
             and float(np.linalg.norm(gyro)) < c.still_rate
-        )
-        up_imu = reading.attitude_body_in_world.inv().apply(UP)
-        if still:
-            # The mean of every standing reading at first, then a running mean.
-            self._still_readings += 1
-            weight = max(min(1.0, dt / c.bias_time_s), 1.0 / self._still_readings)
-            self.bias += weight * (gyro - self.bias)
-            if c.level_start and not self.calibrated:
-                self._up_sums += (up_imu, support_normal(feet))
-            self._still_s += dt
-            if self.calibrated and self._tilt_offset is None and c.level_start:
-                # Standing on level ground, the feet's plane is level: the IMU's tilt
-                # beyond it is its own offset, taken out from now on.
-                imu, legs = self._up_sums
-                self._tilt_offset = Rotation.align_vectors([legs], [imu])[0]
-        rotation_before = self.pose.rotation
-        turned = rotation_before * Rotation.from_rotvec((gyro - self.bias) * dt)
-        up_measured = up_imu if self._tilt_offset is None else self._tilt_offset.apply(up_imu)
-        up_predicted = turned.inv().apply(UP)
+        ):
+            self._stand(gyro, up_imu, feet, dt)
+        before = self.rotation_matrix
+        turned = before @ rodrigues((gyro - self.bias) * dt)
+        up_measured = up_imu if self._tilt_offset is None else self._tilt_offset @ up_imu
         gain = min(1.0, dt / c.tilt_time_s)
-        rotation = turned * Rotation.from_rotvec(gain * np.cross(up_measured, up_predicted))
-        if np.arccos(np.clip(rotation.apply(UP)[2], -1.0, 1.0)) > c.lost_tilt:
+        rotation = turned @ rodrigues(gain * _cross(up_measured, turned[2]))
+        if math.acos(min(1.0, max(-1.0, rotation[2, 2]))) > c.lost_tilt:
             self.lost = "the body has tipped over (tilt beyond its limit)"
         both = np.asarray(reading.standing, dtype=bool) & np.asarray(last.standing, dtype=bool)
-        assert last_feet is not None
         if both.any():
-            moved = rotation_before.apply(last_feet[both]) - rotation.apply(feet[both])
-            assert last_tibias is not None and self._tibias is not None
-            tibias_before = rotation_before * last_tibias[both]
-            rolled = ((rotation * self._tibias[both]) * tibias_before.inv()).as_rotvec()
-            moved += np.cross(rolled, self.kinematics.spec.foot_radius * UP)
+            assert last_feet is not None and last_tibias is not None
+            moved = last_feet[both] @ before.T - feet[both] @ rotation.T
+            tibias_before = before @ last_tibias[both]
+            turns = (rotation @ self._tibias[both]) @ tibias_before.transpose(0, 2, 1)
+            # A turn (x, y, z) of a sphere of radius r rolls its centre by (x, y, z) x (0, 0, r).
+            rolled = rotation_vectors(turns) * self.kinematics.spec.foot_radius
+            moved[:, 0] += rolled[:, 1]
+            moved[:, 1] -= rolled[:, 0]
             median = np.median(moved, axis=0)
             steady = np.linalg.norm(moved - median, axis=1) <= c.slip_tolerance_m
             self.slipped += int(np.count_nonzero(~steady))
@@ -239,14 +236,41 @@ class LegInertialEstimator:
             self._unsupported_s += dt
             if self._unsupported_s > c.coast_s:
                 self.lost = f"no foot has stood for {self._unsupported_s:.2f} s"
-        travelled = float(np.linalg.norm(step))
-        self.pose = Pose(self.pose.position + step, rotation)
+        self.rotation_matrix = rotation
+        self.position = self.position + step
+        self._grow(float(np.linalg.norm(step)), dt)
+
+    def _stand(
+        self,
+        gyro: npt.NDArray[np.float64],
+        up_imu: npt.NDArray[np.float64],
+        feet: npt.NDArray[np.float64],
+        dt: float,
+    ) -> None:
+        """A reading of a robot standing still: learn the gyro's bias and the IMU's tilt."""
+        c = self.config
+        # The mean of every standing reading at first, then a running mean.
+        self._still_readings += 1
+        weight = max(min(1.0, dt / c.bias_time_s), 1.0 / self._still_readings)
+        self.bias += weight * (gyro - self.bias)
+        if c.level_start and not self.calibrated:
+            self._up_sums += (up_imu, support_normal(feet))
+        self._still_s += dt
+        if self.calibrated and self._tilt_offset is None and c.level_start:
+            # Standing on level ground, the feet's plane is level: the IMU's tilt beyond it
+            # is its own offset, taken out from now on.
+            imu, legs = self._up_sums
+            self._tilt_offset = Rotation.align_vectors([legs], [imu])[0].as_matrix()
+
+    def _grow(self, travelled: float, dt: float) -> None:
+        """The path's length, and the covariance, after a tick that moved ``travelled`` [m]."""
+        c = self.config
         # The path's length at a resolution of DISTANCE_STEP_M: the encoders' jitter from
         # one tick to the next is not distance walked.
-        leg = float(np.linalg.norm(self.pose.position - self._distance_anchor))
+        leg = float(np.linalg.norm(self.position - self._distance_anchor))
         if leg >= DISTANCE_STEP_M:
             self.distance_m += leg
-            self._distance_anchor = self.pose.position
+            self._distance_anchor = self.position.copy()
         # Leg odometry's error grows as a random walk with the distance, and the heading's
         # error turns what is walked sideways.
         self.covariance[:3] += c.position_noise_per_m**2 * travelled
@@ -258,19 +282,61 @@ class LegInertialEstimator:
             self.covariance[5] = (
                 c.heading_noise**2 * self._heading_s + (c.residual_bias * self._heading_s) ** 2
             )
-        return self.pose
 
-    def _tibias_in_body(self, joint_positions: npt.NDArray[np.float64]) -> Rotation:
-        """Each tibia's orientation in the body frame (its x axis from the knee to the foot)."""
-        q = np.asarray(joint_positions, dtype=np.float64)
-        yaw = self.kinematics.spec.mount_yaws + q[:, 0]
-        return Rotation.from_euler("ZY", np.column_stack([yaw, -(q[:, 1] + q[:, 2])]))
+    def _tibias_in_body(self, angles: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """Each tibia's orientation in the body frame, shape (6, 3, 3).
 
-    def _level(self, attitude: Rotation) -> Rotation:
-        """The start's heading with the IMU's roll and pitch."""
-        heading = float(self.pose.rotation.as_euler("ZYX")[0])
-        _, pitch, roll = attitude.as_euler("ZYX")
-        return Rotation.from_euler("ZYX", [heading, pitch, roll])
+        Its x axis runs from the knee to the foot: a turn about z by the leg's yaw, then
+        about y by minus the femur and tibia angles.
+        """
+        yaw = self._mount_yaws + angles[:, 0]
+        pitch = -(angles[:, 1] + angles[:, 2])
+        ca, sa, cb, sb = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+        out = np.zeros((len(yaw), 3, 3))
+        out[:, 0, 0], out[:, 0, 1], out[:, 0, 2] = ca * cb, -sa, ca * sb
+        out[:, 1, 0], out[:, 1, 1], out[:, 1, 2] = sa * cb, ca, sa * sb
+        out[:, 2, 0], out[:, 2, 2] = -sb, cb
+        return out
+
+
+def _level(
+    rotation: npt.NDArray[np.float64], up: npt.NDArray[np.float64]
+) -> npt.NDArray[np.float64]:
+    """``rotation``'s heading with the tilt that puts the body's ``up`` (in the body) up."""
+    heading = math.atan2(rotation[1, 0], rotation[0, 0])
+    tilt = Rotation.align_vectors([UP], [up])[0]  # level: the shortest turn of up to z
+    _, pitch, roll = tilt.as_euler("ZYX")
+    return Rotation.from_euler("ZYX", [heading, pitch, roll]).as_matrix()
+
+
+def _cross(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """``a x b`` for two 3-vectors (NumPy's ``cross`` costs more than it computes here)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
+def rodrigues(rotvec: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """The rotation matrix of a rotation vector [rad]."""
+    theta = math.sqrt(float(rotvec @ rotvec))
+    x, y, z = rotvec
+    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    if theta < 1e-12:
+        return np.eye(3) + k
+    return np.eye(3) + math.sin(theta) / theta * k + (1.0 - math.cos(theta)) / theta**2 * (k @ k)
+
+
+def rotation_vectors(matrices: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """The rotation vectors of rotation matrices, shape (n, 3, 3) to (n, 3) [rad]."""
+    m = matrices
+    vee = 0.5 * np.stack(
+        [m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0], m[:, 1, 0] - m[:, 0, 1]], axis=1
+    )
+    sine = np.linalg.norm(vee, axis=1)
+    cosine = 0.5 * (np.trace(m, axis1=1, axis2=2) - 1.0)
+    angle = np.arctan2(sine, cosine)
+    scale = np.where(sine > 1e-12, angle / np.maximum(sine, 1e-300), 1.0)
+    return vee * scale[:, None]
 
 
 def support_normal(feet_in_body: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:

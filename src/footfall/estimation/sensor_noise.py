@@ -6,7 +6,8 @@ are those of the parts footfall's robots carry:
 - **Gyro**: Bosch BMI055 (the RealSense D435i's IMU): rate noise density 0.014 deg/s/sqrt(Hz)
   (2.4e-4 rad/s/sqrt(Hz)), read at the control rate with a bandwidth of half of it; a turn-on
   bias of 0.5 deg/s (1 sigma per axis, within the datasheet's +-1 deg/s zero-rate offset),
-  which then wanders as a random walk of 2e-5 rad/s/sqrt(s).
+  which then wanders as a random walk of 5e-6 rad/s/sqrt(s) (8 deg/h after a minute, a
+  consumer MEMS gyro's bias instability).
 - **Attitude** (roll and pitch from the accelerometer's gravity): an offset of 0.3 deg per
   axis (a calibrated accelerometer's 5 mg) and 0.1 deg of noise per reading. Its heading is
   the simulator's, but the estimator takes only roll and pitch from it.
@@ -43,7 +44,7 @@ class SensorNoiseConfig:
 
     gyro_noise_density: float = math.radians(0.014)
     gyro_bias: float = math.radians(0.5)
-    gyro_bias_walk: float = 2e-5
+    gyro_bias_walk: float = 5e-6
     tilt_offset: float = math.radians(0.3)
     tilt_noise: float = math.radians(0.1)
     encoder_resolution: float = 2.0 * math.pi / 4096

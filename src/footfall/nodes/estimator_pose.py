@@ -81,7 +81,8 @@ class EstimatorPose:
         self.answered = 0
         self.unanswered = 0
         self._swinging = np.zeros(6, dtype=bool)
-        self._history: deque[tuple[float, Pose]] = deque(maxlen=HISTORY_TICKS)
+        # (robot's time, body position, body rotation matrix) of the latest ticks.
+        self._history: deque[tuple[float, np.ndarray, np.ndarray]] = deque(maxlen=HISTORY_TICKS)
         self._said: str | None = None
         self._clock_offset = 0.0  # the controller's clock minus the robot's [s]
         bus.subscribe(RobotState.TOPIC, self._on_state)
@@ -136,7 +137,7 @@ class EstimatorPose:
         standing = ~self._swinging
         if state.feet_in_contact is not None:
             standing &= np.asarray(state.feet_in_contact, dtype=bool)
-        pose = self.estimator.update(
+        self.estimator.update(
             BodyReading(
                 state.time,
                 state.joint_positions,
@@ -146,7 +147,8 @@ class EstimatorPose:
                 standing,
             )
         )
-        self._history.append((state.time, pose))
+        e = self.estimator
+        self._history.append((state.time, e.position, e.rotation_matrix))
         self._say(state.time)
 
     def _say(self, stamp: float) -> None:
@@ -168,8 +170,11 @@ class EstimatorPose:
             self.unanswered += 1
             return
         taken = frame.stamp - self._clock_offset  # on the robot's clock
-        before = [(t, pose) for t, pose in self._history if t <= taken + 1e-9]
-        _, body = before[-1] if before else self._history[0]
+        chosen = self._history[0]
+        for entry in self._history:
+            if entry[0] <= taken + 1e-9:
+                chosen = entry
+        body = Pose(chosen[1].copy(), Rotation.from_matrix(chosen[2]))
         self.answered += 1
         self.bus.publish(
             self.topic, PoseEstimate(frame.stamp, body.compose(frame.camera_in_body), body)
