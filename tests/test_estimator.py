@@ -294,3 +294,28 @@ def test_a_pose_option_the_estimator_does_not_have_is_refused(tmp_path):
 
     args = ["walk", "--pose", "estimator", "--pose-option", "colour=blue", "--seconds", "1"]
     assert main([*args, "--out", str(tmp_path)]) == 2
+
+
+def test_a_robot_without_an_imu_is_told_the_estimator_needs_one():
+    """A backend with no IMU of its own and a camera without one: the estimator's heading
+    would be a gyro that is not there. The walk refuses to start, saying so."""
+    from footfall.backends.registry import BACKENDS
+    from footfall.errors import ConfigError
+    from footfall.sim.hexapod import MujocoHexapod
+    from footfall.sim.walk import simulate_walk
+    from footfall.sim.walk_request import WalkRequest, prepare_walk
+
+    class WithoutImu(MujocoHexapod):
+        attitude = None  # as a servo-only robot: its attitude would come from elsewhere
+
+    BACKENDS.register("without-imu", WithoutImu)
+    try:
+        job = prepare_walk(WalkRequest(terrain="flat", seconds=1, backend="without-imu"))
+        simulate_walk(job.spec, job.settings, terrain=job.terrain)  # the pose's own attitude
+        job = prepare_walk(
+            WalkRequest(terrain="flat", seconds=1, backend="without-imu", pose="estimator")
+        )
+        with pytest.raises(ConfigError, match="estimator pose source needs an IMU"):
+            simulate_walk(job.spec, job.settings, terrain=job.terrain)
+    finally:
+        BACKENDS.unregister("without-imu")

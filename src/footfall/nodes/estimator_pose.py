@@ -64,6 +64,7 @@ class EstimatorPose:
     """
 
     name = "pose"
+    needs_imu = True  # the heading is the gyro's
 
     def __init__(
         self,

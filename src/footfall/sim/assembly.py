@@ -19,6 +19,7 @@ from footfall.backends import BackendSetup, HexapodBackend
 from footfall.backends.attitude import ImuAttitude, PoseAttitude
 from footfall.backends.registry import BACKENDS
 from footfall.control_loop import WalkingGraph, WalkLog
+from footfall.errors import ConfigError
 from footfall.messages import DepthFrame, GaitState, GroundPrior
 from footfall.metrics import walk_metrics
 from footfall.motion.walker import WalkController
@@ -220,6 +221,11 @@ class WalkingRobot:
                 # A robot without an IMU of its own takes its attitude from its camera's
                 # IMU where the camera has one, else from its pose source.
                 imu = getattr(camera, "has_imu", False)
+                if not imu and getattr(pose_source, "needs_imu", False):
+                    raise ConfigError(
+                        f"the {settings.pose_source} pose source needs an IMU: the robot's "
+                        "own, or its camera's (a RealSense D435i)"
+                    )
                 backend.attitude = ImuAttitude(bus) if imu else PoseAttitude(bus)
             if standing.feet_in_world is not None:
                 ground = float(np.mean(standing.feet_in_world[:, 2])) - spec.foot_radius
