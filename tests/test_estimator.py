@@ -32,7 +32,7 @@ from footfall.sensing.pose import Pose
 
 DT = 0.01
 STEP_S = 0.5  # each tripod swings this long
-STAND_S = 2.5  # standing still before walking: the gyro's calibration
+STAND_S = 3.5  # standing still before walking: the gyro's calibration
 TRIPODS = (np.array([0, 2, 4]), np.array([1, 3, 5]))
 
 

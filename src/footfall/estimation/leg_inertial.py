@@ -76,8 +76,8 @@ class EstimatorConfig:
     """
 
     tilt_time_s: float = 0.5
-    bias_time_s: float = 1.0
-    calibration_s: float = 2.0
+    bias_time_s: float = 5.0
+    calibration_s: float = 3.0
     still_joint_rate: float = 0.05
     still_rate: float = 0.05
     slip_tolerance_m: float = 0.003
