@@ -319,3 +319,18 @@ def test_a_robot_without_an_imu_is_told_the_estimator_needs_one():
             simulate_walk(job.spec, job.settings, terrain=job.terrain)
     finally:
         BACKENDS.unregister("without-imu")
+
+
+def test_two_standing_feet_that_disagree_leave_their_median():
+    """When every standing foot moves unlike the others (two feet, one sliding 1 cm in a
+    tick) none can be called the slipping one: the body moves by their median, and the
+    estimate stays a number."""
+    walk = SyntheticWalk(forward=0.05, left=0.0, yaw_rate=0.0)
+    walk.slip = (1, STAND_S + 0.2, STAND_S + 0.21, np.array([0.01, 0.0, 0.0]))
+    estimator = LegInertialEstimator(walk.kin, Pose(walk.start, Rotation.identity()))
+    two = np.array([False, True, False, True, False, False])  # of the tripod standing first
+    for _, state, swinging in walk.states(STAND_S + 0.4):
+        standing = ~swinging & two if swinging.any() else ~swinging
+        estimator.update(dataclasses.replace(reading(state, swinging), standing=standing))
+    assert np.all(np.isfinite(estimator.position))
+    assert np.linalg.norm(estimator.position - state.position_body_in_world) < 0.006

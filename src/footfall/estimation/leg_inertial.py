@@ -228,7 +228,8 @@ class LegInertialEstimator:
             median = np.median(moved, axis=0)
             steady = np.linalg.norm(moved - median, axis=1) <= c.slip_tolerance_m
             self.slipped += int(np.count_nonzero(~steady))
-            step = moved[steady].mean(axis=0)
+            # Feet that all disagree (two, far apart) leave their median.
+            step = moved[steady].mean(axis=0) if steady.any() else median
             self._velocity = step / dt
             self._unsupported_s = 0.0
         else:
