@@ -22,7 +22,14 @@ from scipy.spatial.transform import Rotation
 
 from footfall.estimation.leg_inertial import BodyReading, EstimatorConfig, LegInertialEstimator
 from footfall.estimation.sensor_noise import NoisySensors, SensorNoiseConfig
-from footfall.messages import DepthFrame, EffectorTargets, LogLine, PoseEstimate, RobotState
+from footfall.messages import (
+    DepthFrame,
+    EffectorTargets,
+    LogLine,
+    OdometryEstimate,
+    PoseEstimate,
+    RobotState,
+)
 from footfall.nodes.estimator_pose import EstimatorPose, start_pose
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.spec import load_spec
@@ -231,8 +238,10 @@ def test_no_pose_while_calibrating_nor_once_lost():
     bus = InProcessBus()
     poses: list[PoseEstimate] = []
     logs: list[LogLine] = []
+    odometry: list[OdometryEstimate] = []
     bus.subscribe(PoseEstimate.TOPIC, poses.append)
     bus.subscribe(LogLine.TOPIC, logs.append)
+    bus.subscribe(OdometryEstimate.TOPIC, odometry.append)
     first = next(walk.states(0.0))[1]
     node = EstimatorPose(bus, walk.spec, start_pose(walk.spec, first))
     config = EstimatorConfig()
@@ -259,6 +268,14 @@ def test_no_pose_while_calibrating_nor_once_lost():
             error = estimate.body_in_world.position - state.position_body_in_world
             assert np.linalg.norm(error) < 2e-3
     assert node.estimator.lost is not None and "no foot has stood" in node.estimator.lost
+    # Every tick an odometry estimate: tracking from calibration until lost, its position
+    # uncertainty growing as the robot walks.
+    assert len(odometry) == round((STAND_S + 2.0) / DT) + 1
+    tracking = [o.stamp for o in odometry if o.tracking]
+    assert config.calibration_s <= tracking[0] <= config.calibration_s + 2 * DT
+    assert lifted < tracking[-1] <= lifted + config.coast_s + 2 * DT
+    sigmas = [o.covariance[0] for o in odometry if STAND_S <= o.stamp < lifted]
+    assert sigmas[-1] > sigmas[0] and all(np.diff(sigmas) >= 0)
     assert [m.level for m in logs] == ["info", "error"]
     assert "lost" in logs[-1].text
 
@@ -334,3 +351,24 @@ def test_two_standing_feet_that_disagree_leave_their_median():
         estimator.update(dataclasses.replace(reading(state, swinging), standing=standing))
     assert np.all(np.isfinite(estimator.position))
     assert np.linalg.norm(estimator.position - state.position_body_in_world) < 0.006
+
+
+def test_odometry_records_as_ros_odometry_with_its_covariance():
+    """In an MCAP file or a bag the estimator's odometry is a nav_msgs/Odometry on /odometry:
+    the body's pose in the world with the diagonal covariance, the velocity in the body
+    frame (a body facing +y walking along +y moves forward)."""
+    from footfall.recording.ros_types import to_ros, typestore
+
+    body = Pose(np.array([1.0, 2.0, 0.09]), Rotation.from_euler("z", math.pi / 2))
+    covariance = np.array([1e-4, 2e-4, 3e-4, 1e-5, 2e-5, 3e-5])
+    estimate = OdometryEstimate(2.5, body, np.array([0.0, 0.1, 0.0]), covariance, True)
+    [(channel, kind, ros)] = to_ros(OdometryEstimate.TOPIC, estimate)
+    assert (channel, kind) == ("/odometry", "nav_msgs/msg/Odometry")
+    assert ros.child_frame_id == "base_link" and ros.header.frame_id == "world"
+    assert np.allclose(np.asarray(ros.pose.covariance).reshape(6, 6), np.diag(covariance))
+    assert (ros.pose.pose.position.x, ros.pose.pose.position.y) == (1.0, 2.0)
+    linear = ros.twist.twist.linear
+    assert np.allclose([linear.x, linear.y, linear.z], [0.1, 0.0, 0.0])
+    data = bytes(typestore().serialize_cdr(ros, kind))
+    back = typestore().deserialize_cdr(data, kind)
+    assert np.allclose(back.pose.covariance, ros.pose.covariance)

@@ -29,6 +29,7 @@ from footfall.messages import (
     ModeCommand,
     NewMap,
     Obstacles,
+    OdometryEstimate,
     PlanningGoal,
     PoseEstimate,
     Posture,
@@ -77,6 +78,7 @@ def examples(rng: np.random.Generator) -> list:
         ),
         DepthFrame(0.5, rng.integers(0, 9000, (48, 64), dtype=np.uint16), camera, _pose(rng), 2e-4),
         PoseEstimate(0.25, _pose(rng), _pose(rng)),
+        OdometryEstimate(0.26, _pose(rng), rng.normal(size=3), rng.uniform(0, 1, 6), True),
         GroundPrior(0.0, rng.normal(size=3), -0.01, 0.6),
         MapUpdate(
             3.0,

@@ -176,6 +176,11 @@ class LegInertialEstimator:
         return Pose(self.position.copy(), Rotation.from_matrix(self.rotation_matrix))
 
     @property
+    def velocity(self) -> npt.NDArray[np.float64]:
+        """The body's velocity over the last tick, in the world [m/s]."""
+        return self._velocity.copy()
+
+    @property
     def calibrated(self) -> bool:
         """True once the gyro bias is known well enough to give a pose."""
         return self._still_s >= self.config.calibration_s

@@ -24,6 +24,7 @@ from footfall.messages.types import LogLine as LogLine
 from footfall.messages.types import MapUpdate as MapUpdate
 from footfall.messages.types import Mode as Mode
 from footfall.messages.types import ModeCommand as ModeCommand
+from footfall.messages.types import OdometryEstimate as OdometryEstimate
 from footfall.messages.types import PoseEstimate as PoseEstimate
 from footfall.messages.types import RobotState as RobotState
 from footfall.messages.types import Touchdown as Touchdown
@@ -48,6 +49,7 @@ __all__ = [
     "ModeCommand",
     "NewMap",
     "Obstacles",
+    "OdometryEstimate",
     "PlanningGoal",
     "PoseEstimate",
     "Posture",

@@ -200,6 +200,36 @@ class PoseEstimate(Message):
 
 
 @dataclass(frozen=True)
+class OdometryEstimate(Message):
+    """The robot's own estimate of its body at every control tick, with its uncertainty.
+
+    footfall's estimator (``--pose estimator``) publishes one a tick, as a legged robot's
+    state estimator does, beside the :class:`PoseEstimate` it answers each depth image with.
+
+    Attributes:
+        stamp: Time [s], on the controller's clock.
+        body_in_world: The body frame in the world.
+        velocity_in_world: The body's velocity, shape (3,) [m/s].
+        covariance: Diagonal covariance of x, y, z [m^2] and roll, pitch, yaw [rad^2],
+            shape (6,).
+        tracking: True when the estimate may be used; False while the estimator calibrates
+            or once it is lost.
+    """
+
+    TOPIC = "pose/odometry"
+
+    stamp: float
+    body_in_world: Pose
+    velocity_in_world: npt.NDArray[np.float64]
+    covariance: npt.NDArray[np.float64]
+    tracking: bool
+
+    def __post_init__(self) -> None:
+        for name, shape in (("velocity_in_world", (3,)), ("covariance", (6,))):
+            object.__setattr__(self, name, _shaped(name, getattr(self, name), shape, np.float64))
+
+
+@dataclass(frozen=True)
 class ImuReading(Message):
     """One reading of an inertial unit, turned into the body frame.
 

@@ -11,7 +11,9 @@ own odometry, and this estimate *is* that odometry, measured rather than command
 weighing it against the commanded motion would only pull it back towards what the legs
 were asked to do. It gives no pose while it calibrates its gyro on a standing robot (the
 robot stands until poses come) nor once it is lost (a body tipped over, no foot standing),
-and logs both.
+and logs both. Every tick it also publishes its estimate with its velocity and covariance
+(:class:`~footfall.messages.OdometryEstimate` on ``pose/odometry``; ``tracking`` False while
+it calibrates or once lost), as a legged robot's state estimator does.
 
 Options (``--pose-option KEY=VALUE``): ``noise`` is ``realistic`` (the simulated robot's IMU
 and encoders read as a real robot's, :mod:`footfall.estimation.sensor_noise`; the default on
@@ -33,6 +35,7 @@ from footfall.messages import (
     DepthFrame,
     EffectorTargets,
     LogLine,
+    OdometryEstimate,
     PoseEstimate,
     RobotState,
 )
@@ -150,6 +153,11 @@ class EstimatorPose:
         )
         e = self.estimator
         self._history.append((state.time, e.position, e.rotation_matrix))
+        body = Pose(e.position.copy(), Rotation.from_matrix(e.rotation_matrix))
+        odometry = OdometryEstimate(
+            state.time + self._clock_offset, body, e.velocity, e.covariance.copy(), e.ready
+        )
+        self.bus.publish(OdometryEstimate.TOPIC, odometry)
         self._say(state.time)
 
     def _say(self, stamp: float) -> None:

@@ -11,6 +11,7 @@ color, depth       /camera/color/image_raw                sensor_msgs/Image (rgb
 pose               /camera/pose                           geometry_msgs/PoseStamped
                    /tf (world -> base_link, camera)       tf2_msgs/TFMessage
 pose/raw           /footfall/pose/raw                     footfall_msgs/Encoded
+pose/odometry      /odometry                              nav_msgs/Odometry (body, covariance)
 map                /map/grid                              grid_map_msgs/GridMap
                    /map/occupancy                         nav_msgs/OccupancyGrid
 effector_targets   /effector_targets, /tf (foot_0..5)     footfall_msgs/EffectorTargets
@@ -50,6 +51,7 @@ from footfall.messages import (
     JointTargets,
     LogLine,
     MapUpdate,
+    OdometryEstimate,
     PoseEstimate,
     RobotState,
     Touchdown,
@@ -354,6 +356,8 @@ def to_ros(topic: str, message: Message) -> list[tuple[str, str, Any]]:
             ]
         )
         out.append(("/tf", "tf2_msgs/msg/TFMessage", tf))
+    elif isinstance(message, OdometryEstimate):
+        out.append(("/odometry", "nav_msgs/msg/Odometry", _odometry(message)))
     elif isinstance(message, MapUpdate):
         out.append(("/map/grid", "grid_map_msgs/msg/GridMap", _grid_map(message)))
         out.append(("/map/occupancy", "nav_msgs/msg/OccupancyGrid", _occupancy(message)))
@@ -437,6 +441,32 @@ def to_ros(topic: str, message: Message) -> list[tuple[str, str, Any]]:
     else:
         out.append((f"/footfall/{topic}", "footfall_msgs/msg/Encoded", encoded(message)))
     return out
+
+
+def _odometry(estimate: OdometryEstimate) -> Any:
+    """A ``nav_msgs/Odometry``: the body in the world with its covariance.
+
+    The velocity goes in the body frame, ROS's convention for the twist.
+    """
+    body = estimate.body_in_world
+    vx, vy, vz = (float(v) for v in body.rotation.inv().apply(estimate.velocity_in_world))
+    covariance = np.zeros((6, 6))
+    covariance[np.diag_indices(6)] = estimate.covariance
+    vector = _t("geometry_msgs/msg/Vector3")
+    twist = _t("geometry_msgs/msg/Twist")(
+        linear=vector(x=vx, y=vy, z=vz), angular=vector(x=0.0, y=0.0, z=0.0)
+    )
+    return _t("nav_msgs/msg/Odometry")(
+        header=header(estimate.stamp, WORLD_FRAME),
+        child_frame_id=BODY_FRAME,
+        pose=_t("geometry_msgs/msg/PoseWithCovariance")(
+            pose=_pose(body), covariance=covariance.ravel()
+        ),
+        # Velocities are not estimated with a covariance of their own: -1 says unknown.
+        twist=_t("geometry_msgs/msg/TwistWithCovariance")(
+            twist=twist, covariance=np.full(36, -1.0)
+        ),
+    )
 
 
 def _robot_state(state: RobotState) -> list[tuple[str, str, Any]]:
