@@ -372,3 +372,26 @@ def test_odometry_records_as_ros_odometry_with_its_covariance():
     data = bytes(typestore().serialize_cdr(ros, kind))
     back = typestore().deserialize_cdr(data, kind)
     assert np.allclose(back.pose.covariance, ros.pose.covariance)
+
+
+unit = st.floats(-1.0, 1.0, allow_nan=False)
+
+
+@settings(max_examples=200, deadline=None)
+@given(axis=st.tuples(unit, unit, unit), angle=st.floats(0.0, math.pi, allow_nan=False))
+def test_the_rotation_helpers_agree_with_scipy(axis, angle):
+    """A rotation vector's matrix (Rodrigues), the matrix's rotation vector and its
+    quaternion are scipy's, to rounding, up to a half turn (the rotation vector short of
+    one: the estimator's turns are those of a tick)."""
+    from footfall.estimation.leg_inertial import rodrigues, rotation_of, rotation_vectors
+
+    direction = np.asarray(axis)
+    if np.linalg.norm(direction) < 1e-3:
+        direction = np.array([0.0, 0.0, 1.0])
+    rotvec = angle * direction / np.linalg.norm(direction)
+    truth = Rotation.from_rotvec(rotvec)
+    matrix = rodrigues(rotvec)
+    assert np.allclose(matrix, truth.as_matrix(), atol=1e-12)
+    assert (rotation_of(matrix) * truth.inv()).magnitude() < 1e-9
+    if angle < 3.0:  # near a half turn the axis is ill-conditioned (and has two signs)
+        assert np.allclose(rotation_vectors(matrix[None])[0], rotvec, atol=1e-9)

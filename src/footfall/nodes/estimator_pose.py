@@ -29,7 +29,12 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from footfall.errors import ConfigError
-from footfall.estimation.leg_inertial import BodyReading, EstimatorConfig, LegInertialEstimator
+from footfall.estimation.leg_inertial import (
+    BodyReading,
+    EstimatorConfig,
+    LegInertialEstimator,
+    rotation_of,
+)
 from footfall.estimation.sensor_noise import NoisySensors, SensorNoiseConfig
 from footfall.messages import (
     DepthFrame,
@@ -153,7 +158,7 @@ class EstimatorPose:
         )
         e = self.estimator
         self._history.append((state.time, e.position, e.rotation_matrix))
-        body = Pose(e.position.copy(), Rotation.from_matrix(e.rotation_matrix))
+        body = Pose(e.position.copy(), rotation_of(e.rotation_matrix))
         odometry = OdometryEstimate(
             state.time + self._clock_offset, body, e.velocity, e.covariance.copy(), e.ready
         )
@@ -183,7 +188,7 @@ class EstimatorPose:
         for entry in self._history:
             if entry[0] <= taken + 1e-9:
                 chosen = entry
-        body = Pose(chosen[1].copy(), Rotation.from_matrix(chosen[2]))
+        body = Pose(chosen[1].copy(), rotation_of(chosen[2]))
         self.answered += 1
         self.bus.publish(
             self.topic, PoseEstimate(frame.stamp, body.compose(frame.camera_in_body), body)
