@@ -395,3 +395,22 @@ def test_the_rotation_helpers_agree_with_scipy(axis, angle):
     assert (rotation_of(matrix) * truth.inv()).magnitude() < 1e-9
     if angle < 3.0:  # near a half turn the axis is ill-conditioned (and has two signs)
         assert np.allclose(rotation_vectors(matrix[None])[0], rotvec, atol=1e-9)
+
+
+def test_a_limp_robot_keeps_its_place_at_the_height_its_legs_give():
+    """While the servos are not standing (limp, rising, sitting) the feet slide as the legs
+    fold: the body keeps its place over the ground and takes its height from the legs; the
+    odometry's horizontal motion of sliding feet is not believed."""
+    walk = SyntheticWalk(forward=0.0, left=0.0, yaw_rate=0.0)
+    estimator = LegInertialEstimator(walk.kin, Pose(walk.start, Rotation.identity()))
+    rest = walk.spec.rest_feet_in_body()
+    rest[:, 2] += walk.spec.foot_radius
+    for k in range(100):
+        fold = k / 99  # the legs fold: the body sinks 2 cm, the feet slide 2 cm outwards
+        feet = rest.copy()
+        feet[:, :2] *= 1.0 + fold * 0.02 / np.linalg.norm(rest[:, :2], axis=1)[:, None]
+        feet[:, 2] += 0.02 * fold
+        angles = walk.kin.inverse_in_body(feet)
+        still = (np.zeros((6, 3)), np.zeros(3), Rotation.identity(), np.ones(6, dtype=bool))
+        estimator.update(BodyReading(k * DT, angles, *still, supported=False))
+    assert np.allclose(estimator.position, walk.start - [0.0, 0.0, 0.02], atol=1e-9)

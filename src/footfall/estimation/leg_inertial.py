@@ -24,7 +24,9 @@ The model, per control tick of length ``dt``:
   does. A foot whose motion differs from the median of the others by more than
   ``slip_tolerance_m`` is slipping and left out; the rest are averaged. With no standing
   foot the body coasts at its last velocity for at most ``coast_s``; longer, the estimator
-  is *lost*.
+  is *lost*. While the robot is not standing under its controller (limp, rising, sitting:
+  ``BodyReading.supported``) its feet slide as the legs fold, so the body keeps its place
+  over the ground it started on, at the height its legs hold it.
 
 Uncertainty is propagated in a diagonal covariance of ``x, y, z, roll, pitch, yaw``: each
 metre of leg odometry adds ``position_noise_per_m^2`` to the position variances, and the
@@ -114,6 +116,8 @@ class BodyReading:
         angular_velocity_body_in_body: Gyro rates, shape (3,) [rad/s].
         attitude_body_in_world: The IMU's attitude; only its roll and pitch are used.
         standing: Feet that support the body, shape (6,).
+        supported: The robot stands under its controller (the servos' posture is standing);
+            False while it is limp, rises or sits, when its feet may slide as the legs fold.
     """
 
     stamp: float
@@ -122,6 +126,7 @@ class BodyReading:
     angular_velocity_body_in_body: npt.NDArray[np.float64]
     attitude_body_in_world: Rotation
     standing: npt.NDArray[np.bool_]
+    supported: bool = True
 
 
 class LegInertialEstimator:
@@ -161,6 +166,8 @@ class LegInertialEstimator:
         self._still_readings = 0
         self._up_sums = np.zeros((2, 3))  # the IMU's and the feet's up, summed while calibrating
         self._tilt_offset: npt.NDArray[np.float64] | None = None
+        self._tilt_s = 0.0
+        self._ground_z = 0.0  # the ground's height under the start [m]
         self._heading_s = 0.0
         self._unsupported_s = 0.0
         self._velocity = np.zeros(3)
@@ -202,6 +209,7 @@ class LegInertialEstimator:
         up_imu = reading.attitude_body_in_world.as_matrix()[2]
         if last is None:
             self.rotation_matrix = _level(self.rotation_matrix, up_imu)
+            self._ground_z = self.position[2] - self._height_over(feet, reading.standing)
             return
         dt = reading.stamp - last.stamp
         if dt <= 0.0 or self.lost is not None:
@@ -212,7 +220,7 @@ class LegInertialEstimator:
             and float(np.max(np.abs(reading.joint_velocities))) < c.still_joint_rate
             and float(np.linalg.norm(gyro)) < c.still_rate
         ):
-            self._stand(gyro, up_imu, feet, dt)
+            self._stand(gyro, up_imu, feet, dt, reading.supported)
         before = self.rotation_matrix
         turned = before @ rodrigues((gyro - self.bias) * dt)
         up_measured = up_imu if self._tilt_offset is None else self._tilt_offset @ up_imu
@@ -220,6 +228,14 @@ class LegInertialEstimator:
         rotation = turned @ rodrigues(gain * _cross(up_measured, turned[2]))
         if math.acos(min(1.0, max(-1.0, rotation[2, 2]))) > c.lost_tilt:
             self.lost = "the body has tipped over (tilt beyond its limit)"
+        if not reading.supported:
+            # Limp, rising or sitting, the feet slide as the legs fold: the body stays where
+            # it was over the ground it started on, at the height its legs hold it.
+            self.rotation_matrix = rotation
+            self._velocity = np.zeros(3)
+            height = self._ground_z + self._height_over(feet, reading.standing)
+            self.position = np.array([self.position[0], self.position[1], height])
+            return
         both = np.asarray(reading.standing, dtype=bool) & np.asarray(last.standing, dtype=bool)
         if both.any():
             assert last_feet is not None and last_tibias is not None
@@ -252,6 +268,7 @@ class LegInertialEstimator:
         up_imu: npt.NDArray[np.float64],
         feet: npt.NDArray[np.float64],
         dt: float,
+        supported: bool,
     ) -> None:
         """A reading of a robot standing still: learn the gyro's bias and the IMU's tilt."""
         c = self.config
@@ -259,14 +276,21 @@ class LegInertialEstimator:
         self._still_readings += 1
         weight = max(min(1.0, dt / c.bias_time_s), 1.0 / self._still_readings)
         self.bias += weight * (gyro - self.bias)
-        if c.level_start and not self.calibrated:
-            self._up_sums += (up_imu, support_normal(feet))
         self._still_s += dt
-        if self.calibrated and self._tilt_offset is None and c.level_start:
+        if c.level_start and supported and self._tilt_offset is None:
             # Standing on level ground, the feet's plane is level: the IMU's tilt beyond it
-            # is its own offset, taken out from now on.
-            imu, legs = self._up_sums
-            self._tilt_offset = Rotation.align_vectors([legs], [imu])[0].as_matrix()
+            # is its own offset, taken out once the robot has stood as long as it calibrates.
+            self._up_sums += (up_imu, support_normal(feet))
+            self._tilt_s += dt
+            if self._tilt_s >= c.calibration_s:
+                imu, legs = self._up_sums
+                self._tilt_offset = Rotation.align_vectors([legs], [imu])[0].as_matrix()
+
+    def _height_over(self, feet: npt.NDArray[np.float64], standing: npt.NDArray[np.bool_]) -> float:
+        """How high the body stands over the ground under its standing feet (all, if none) [m]."""
+        standing = np.asarray(standing, dtype=bool)
+        chosen = feet[standing] if standing.any() else feet
+        return -float(np.mean(chosen @ self.rotation_matrix[2])) + self.kinematics.spec.foot_radius
 
     def _grow(self, travelled: float, dt: float) -> None:
         """The path's length, and the covariance, after a tick that moved ``travelled`` [m]."""

@@ -11,9 +11,11 @@ own odometry, and this estimate *is* that odometry, measured rather than command
 weighing it against the commanded motion would only pull it back towards what the legs
 were asked to do. It gives no pose while it calibrates its gyro on a standing robot (the
 robot stands until poses come) nor once it is lost (a body tipped over, no foot standing),
-and logs both. Every tick it also publishes its estimate with its velocity and covariance
-(:class:`~footfall.messages.OdometryEstimate` on ``pose/odometry``; ``tracking`` False while
-it calibrates or once lost), as a legged robot's state estimator does.
+and logs both. While the servos are not standing (limp, rising, sitting) it holds the body
+where it was over the ground, at the height its legs give. Every tick it also publishes its
+estimate with its velocity and covariance (:class:`~footfall.messages.OdometryEstimate` on
+``pose/odometry``; ``tracking`` False while it calibrates or once lost), as a legged robot's
+state estimator does.
 
 Options (``--pose-option KEY=VALUE``): ``noise`` is ``realistic`` (the simulated robot's IMU
 and encoders read as a real robot's, :mod:`footfall.estimation.sensor_noise`; the default on
@@ -42,7 +44,9 @@ from footfall.messages import (
     LogLine,
     OdometryEstimate,
     PoseEstimate,
+    Posture,
     RobotState,
+    ServoStatus,
 )
 from footfall.nodes.sources import SourceSetup
 from footfall.robot.kinematics import LegKinematics
@@ -94,8 +98,10 @@ class EstimatorPose:
         self._history: deque[tuple[float, np.ndarray, np.ndarray]] = deque(maxlen=HISTORY_TICKS)
         self._said: str | None = None
         self._clock_offset = 0.0  # the controller's clock minus the robot's [s]
+        self._posture: Posture | None = None  # the servos' (none heard: standing)
         bus.subscribe(RobotState.TOPIC, self._on_state)
         bus.subscribe(EffectorTargets.TOPIC, self._on_targets, last=True)
+        bus.subscribe(ServoStatus.TOPIC, self._on_servo, last=True)
         bus.subscribe(DepthFrame.TOPIC, self._on_depth)
 
     @classmethod
@@ -140,6 +146,9 @@ class EstimatorPose:
             # the robot's clock (the servos', the simulator's) may run apart from it.
             self._clock_offset = targets.stamp - self._history[-1][0]
 
+    def _on_servo(self, status: ServoStatus) -> None:
+        self._posture = status.posture
+
     def _on_state(self, state: RobotState) -> None:
         if self.noise is not None:
             state = self.noise.read(state)
@@ -154,6 +163,7 @@ class EstimatorPose:
                 state.angular_velocity_body_in_body,
                 state.orientation_body_in_world,
                 standing,
+                supported=self._posture in (None, Posture.STANDING),
             )
         )
         e = self.estimator
