@@ -383,7 +383,7 @@ def test_the_rotation_helpers_agree_with_scipy(axis, angle):
     """A rotation vector's matrix (Rodrigues), the matrix's rotation vector and its
     quaternion are scipy's, to rounding, up to a half turn (the rotation vector short of
     one: the estimator's turns are those of a tick)."""
-    from footfall.estimation.leg_inertial import rodrigues, rotation_of, rotation_vectors
+    from footfall.estimation.rotations import rodrigues, rotation_of, rotation_vectors
 
     direction = np.asarray(axis)
     if np.linalg.norm(direction) < 1e-3:

@@ -31,12 +31,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from footfall.errors import ConfigError
-from footfall.estimation.leg_inertial import (
-    BodyReading,
-    EstimatorConfig,
-    LegInertialEstimator,
-    rotation_of,
-)
+from footfall.estimation.leg_inertial import BodyReading, EstimatorConfig, LegInertialEstimator
+from footfall.estimation.rotations import rotation_of
 from footfall.estimation.sensor_noise import NoisySensors, SensorNoiseConfig
 from footfall.messages import (
     DepthFrame,
