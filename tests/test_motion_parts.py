@@ -23,7 +23,8 @@ from footfall.motion.gait_scheduler import GaitScheduler
 from footfall.motion.leg_solver import LegSolver
 from footfall.motion.safety import MAP_FRAMES_BEFORE_RETRY, SafetyMonitor
 from footfall.motion.stroke_governor import StrokeGovernor
-from footfall.planning.terrain_planner import NoFoothold, TerrainPlanner
+from footfall.planning.step_plan import NoFoothold
+from footfall.planning.terrain_planner import TerrainPlanner
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 from footfall.scoring.walkability import score_map

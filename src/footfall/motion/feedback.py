@@ -59,6 +59,7 @@ class BodyFeedback:
         swinging: npt.NDArray[np.bool_],
         feet_in_world: npt.NDArray[np.float64],
         body_z: float,
+        pitch_reference: float = 0.0,
     ) -> None:
         """Integrate one reading over ``dt`` [s].
 
@@ -68,6 +69,7 @@ class BodyFeedback:
             swinging: Which legs swing; the others give the measured height.
             feet_in_world: The controller's foot positions, shape (6, 3) [m].
             body_z: The controller's reference body height in the world [m].
+            pitch_reference: The pitch the body is commanded to hold [rad] (its incline).
         """
         fb = self.config
         if fb is None:
@@ -75,7 +77,9 @@ class BodyFeedback:
         roll, pitch = state.roll_pitch
         limit = fb.tilt_limit
         self.tilt_correction = np.clip(
-            self.tilt_correction - fb.tilt_gain * np.array([roll, pitch]) * dt, -limit, limit
+            self.tilt_correction - fb.tilt_gain * np.array([roll, pitch - pitch_reference]) * dt,
+            -limit,
+            limit,
         )
         stance = ~swinging
         if stance.sum() < 3:

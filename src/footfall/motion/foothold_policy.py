@@ -16,8 +16,9 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
-from footfall.planning.terrain_planner import NoFoothold, StepPoses, TerrainPlanner
-from footfall.robot.planar import PlanarPose
+from footfall.planning.step_plan import NoFoothold, StepPoses
+from footfall.planning.terrain_planner import TerrainPlanner
+from footfall.robot.planar import PlanarPose, level_to_inclined
 
 # Fractions of the commanded speed a step is planned at, fastest first: where footholds
 # are scarce the body slows down so the legs can find them.
@@ -73,6 +74,8 @@ class StepContext:
         height_correction: Height feedback's correction [m].
         feet_in_world: Commanded foot centres now, shape (6, 3) [m].
         support_after: Legs supporting after touchdown, shape (6,).
+        incline_now: The body's pitch now [rad] (:mod:`footfall.motion.incline`).
+        incline_step: The pitch it will have at touchdown [rad].
     """
 
     now: float
@@ -88,6 +91,8 @@ class StepContext:
     height_correction: float
     feet_in_world: npt.NDArray[np.float64]
     support_after: npt.NDArray[np.bool_]
+    incline_now: float = 0.0
+    incline_step: float = 0.0
 
 
 class FootholdPolicy(Protocol):
@@ -113,6 +118,10 @@ class FootholdPolicy(Protocol):
 
     def terrain_under(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64] | None:
         """Highest terrain under points, for swing paths; None for flat ground."""
+        ...
+
+    def steppable_ground(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Mapped ground height at points on cells a foot may use, NaN elsewhere [m]."""
         ...
 
     def plan_step(
@@ -166,6 +175,10 @@ class BlindFootholds:
         """Flat ground: nothing to clear."""
         return None
 
+    def steppable_ground(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """No map: nothing is known."""
+        return np.full(np.shape(xy)[:-1], np.nan)
+
     def plan_step(self, context, nominal, swing, search_from=None, previous=None):  # noqa: D102
         self.plan.nominal = nominal.copy()
         self.plan.targets = nominal.copy()
@@ -206,6 +219,10 @@ class MappedFootholds:
         """Highest mapped height within a foot radius of each point [m]."""
         return self.planner.terrain_under(xy)
 
+    def steppable_ground(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Mapped ground height at points on valid cells, NaN elsewhere [m]."""
+        return self.planner.steppable_ground(xy)
+
     def plan_step(
         self,
         context: StepContext,
@@ -237,6 +254,8 @@ class MappedFootholds:
             touchdown=pose_after(remaining),
             liftoff=pose_after(remaining + (c.groups - 1) * c.step_duration),
             stable=(pose_after(remaining), pose_after(remaining + c.step_duration)),
+            incline_now=c.incline_now,
+            incline_step=c.incline_step,
         )
         # Body heights within reach by touchdown at the height rate limit; the legs see
         # them raised by the height feedback's correction.
@@ -301,6 +320,7 @@ class MappedFootholds:
         """Whether a leg of the body as it stands now reaches a foot position."""
         foot_in_body = context.pose.points_to_body(foot_in_world)
         foot_in_body[2] -= context.body_z + context.height_correction
+        foot_in_body = level_to_inclined(foot_in_body, context.incline_now)
         return bool(self.planner.kinematics.reachable(leg, foot_in_body, self.reach_margin))
 
     def floor(
@@ -318,7 +338,9 @@ class MappedFootholds:
         """
         feet = np.where(swinging[:, None], targets, feet_in_world)
         ground = feet[:, 2] - self.foot_radius
-        wanted = body_height + self.planner.floor_height(ground, context.pose, body_height)
+        wanted = body_height + self.planner.floor_height(
+            ground, context.pose, body_height, context.incline_step
+        )
         allowed = self.plan.body_z
         body_z = float(allowed[np.argmin(np.abs(allowed - wanted))]) if allowed.size else wanted
         return body_z - body_height

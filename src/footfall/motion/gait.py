@@ -158,6 +158,11 @@ class GaitConfig:
             ``"polynomial"`` (the §5.4.1 baseline).
         flow: Flow-function parameters.
         polynomial_apex: Apex of the polynomial arc above the higher end [m].
+        incline_limit: Steepest the body inclines along a slope or a flight of stairs
+            [rad]; 0 keeps it level (:mod:`footfall.motion.incline`).
+        incline_rate: Speed of the body's incline [rad/s].
+        incline_level_share: Share of the legs' height range the rise between the front
+            and the hind feet may take before the body inclines.
     """
 
     kind: str = "tripod"
@@ -174,6 +179,9 @@ class GaitConfig:
     swing: str = "flow"
     flow: FlowConfig = field(default_factory=FlowConfig)
     polynomial_apex: float = 0.1
+    incline_limit: float = math.radians(20.0)
+    incline_rate: float = 0.25
+    incline_level_share: float = 0.4
 
     def __post_init__(self) -> None:
         GAITS.check(self.kind)
@@ -188,7 +196,11 @@ class GaitConfig:
             acceleration_limit=self.acceleration_limit,
             yaw_acceleration_limit=self.yaw_acceleration_limit,
             height_rate_limit=self.height_rate_limit,
+            incline_rate=self.incline_rate,
+            incline_level_share=self.incline_level_share,
         )
+        if not 0.0 <= self.incline_limit < 0.5 * math.pi:
+            raise ConfigError("incline_limit must lie in [0, pi/2) rad")
 
     @cached_property
     def gait(self) -> Gait:

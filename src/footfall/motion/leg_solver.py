@@ -23,7 +23,7 @@ from scipy.spatial.transform import Rotation
 
 from footfall.motion.feedback import BodyFeedback
 from footfall.robot.kinematics import LegKinematics
-from footfall.robot.planar import PlanarPose
+from footfall.robot.planar import PlanarPose, inclined_to_level, level_to_inclined
 
 # A foot drawn in stops this far inside the stretched leg [m].
 _DRAWN_IN_SLACK = 1e-4
@@ -146,6 +146,7 @@ class LegSolver:
         feedback: BodyFeedback,
         twist: tuple[tuple[float, float], float],
         swing_velocity_in_world: npt.NDArray[np.float64],
+        incline: float = 0.0,
     ) -> FootTargets:
         """The foot targets of one tick.
 
@@ -157,6 +158,7 @@ class LegSolver:
             feedback: The attitude and height corrections to apply.
             twist: Body velocity in the body frame [m/s] and yaw rate [rad/s], as applied.
             swing_velocity_in_world: World velocities of the feet, shape (6, 3) [m/s].
+            incline: The body's pitch [rad]: the reference body frame is inclined by it.
 
         Raises:
             UnreachableTargetError: If a supporting foot is out of its leg's reach.
@@ -186,11 +188,13 @@ class LegSolver:
             feet = anchors + rolling_in_body
             angles = self.kinematics.inverse_in_body(feet)
             pitch = angles[:, 1] + angles[:, 2]
-        self.rolling_in_world = pose.vectors_to_world(rolling_in_body)
+        self.rolling_in_world = pose.vectors_to_world(inclined_to_level(rolling_in_body, incline))
         (vx, vy), yaw_rate = twist
         # Velocity of each foot in the body frame: its own world velocity, minus the body's
         # motion (translation and rotation about z).
+        # (Level: the body's pitch changes slowly and is left out of the feet's rates.)
         rates = pose.vectors_to_body(swing_velocity_in_world)
         rates[:, 0] += -vx + yaw_rate * feet[:, 1]
         rates[:, 1] += -vy - yaw_rate * feet[:, 0]
+        rates = level_to_inclined(rates, incline)
         return FootTargets(feet_in_body=feet, velocities_in_body=rates)

@@ -13,7 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.messages import WalkCommand
-from footfall.planning.terrain_planner import NoFoothold
+from footfall.planning.step_plan import NoFoothold
 
 # A robot frozen for want of a foothold retries after this many new map frames.
 MAP_FRAMES_BEFORE_RETRY = 5

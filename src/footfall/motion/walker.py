@@ -37,15 +37,17 @@ from footfall.motion.foothold_policy import (
 )
 from footfall.motion.gait import GaitConfig
 from footfall.motion.gait_scheduler import GaitScheduler
+from footfall.motion.incline import ground_slope, level_slope_limit, wanted_pitch
 from footfall.motion.leg_solver import FootTargets, LegSolver
 from footfall.motion.registration import RegistrationDrift
 from footfall.motion.safety import SafetyMonitor
 from footfall.motion.stroke_governor import StrokeGovernor
 from footfall.motion.swing import SwingTrajectory
 from footfall.motion.swing_feet import SwingFeet
-from footfall.planning.terrain_planner import NoFoothold, TerrainPlanner
+from footfall.planning.step_plan import NoFoothold
+from footfall.planning.terrain_planner import TerrainPlanner
 from footfall.robot.kinematics import LegKinematics
-from footfall.robot.planar import PlanarPose
+from footfall.robot.planar import PlanarPose, level_to_inclined
 from footfall.robot.spec import HexapodSpec
 
 # A body this far off its reference height on resuming is re-anchored on the encoders [m].
@@ -102,6 +104,15 @@ class WalkController:
         self.swing_feet = SwingFeet()
         self.floor = 0.0  # ground height the body keeps its commanded height above [m]
         self.footholds_adjusted = 0
+        # The body's pitch (positive nose down) [rad], where it is heading, and where this
+        # step takes it by touchdown (motion.incline).
+        self.incline = 0.0
+        self.incline_target = 0.0
+        self._step_incline = 0.0
+        margin = planner.config.reach_margin if planner is not None else 0.0
+        self._level_slope = level_slope_limit(
+            self.kinematics, spec, self.config.incline_level_share, margin
+        )
         self.touchdowns: deque[Touchdown] = deque()  # a long run bounds it (maxlen)
         self.touchdown_count = 0
         self.holding = False  # hold still: finish the step under way, take no new one
@@ -150,10 +161,17 @@ class WalkController:
         """Foot positions in the reference body frame, shape (6, 3) [m].
 
         Stance feet are given by their contact anchors, swing feet by their path position.
+        The reference body frame is inclined by :attr:`incline`.
         """
-        feet = self.pose.points_to_body(self.feet_in_world)
-        feet[:, 2] -= self.height
-        return feet
+        return self._to_body(self.feet_in_world)
+
+    def _to_body(
+        self, points_in_world: npt.NDArray[np.float64], incline: float | None = None
+    ) -> npt.NDArray[np.float64]:
+        """World points in the reference body frame (inclined by ``incline``, else now's)."""
+        points = self.pose.points_to_body(points_in_world)
+        points[..., 2] -= self.height
+        return level_to_inclined(points, self.incline if incline is None else incline)
 
     def update(
         self, t: float, command: WalkCommand, state: RobotState | None = None
@@ -174,10 +192,13 @@ class WalkController:
             self.safety.resume()
             self.shaper.stop()  # start again from standstill
         if state is not None:
-            self.body_feedback.update(state, dt, self.swinging, self.feet_in_world, self.height)
+            self.body_feedback.update(
+                state, dt, self.swinging, self.feet_in_world, self.height, self.incline
+            )
         self.shaper.shape(command, dt)
         self._velocity_scale = self._govern(t)
         self._move_body(command, dt)
+        self._incline_body(dt)
         self._advance_gait(t)
         swing_velocity = self._move_swing_feet(t)
         try:
@@ -256,6 +277,8 @@ class WalkController:
             height_correction=self.body_feedback.height_correction,
             feet_in_world=self.feet_commanded_in_world,
             support_after=s.support_after(self.swinging if swing is None else swing),
+            incline_now=self.incline,
+            incline_step=self._step_incline,
         )
 
     def _freeze(
@@ -306,8 +329,7 @@ class WalkController:
             # with the reason.) A foot sent back to where it lifted off, the body stopping
             # for want of a foothold, lands where the body has left it room.
             feet = self.feet_in_body()
-            landing = self.pose.points_to_body(self.footholds.plan.targets)
-            landing[:, 2] -= self.height
+            landing = self._to_body(self.footholds.plan.targets)
             feet[self.swinging] = landing[self.swinging]
             after = feet.copy()
             after[:, 2] -= dh
@@ -320,6 +342,26 @@ class WalkController:
             if np.any(leaves):
                 dh = 0.0
         self.height += dh
+
+    def _incline_body(self, dt: float) -> None:
+        """Turn the body towards its wanted incline at the incline rate.
+
+        The turn waits while a supporting foot, or a swinging foot's landing target, would
+        leave its leg's reach, or the margin inside it that the stroke governor keeps.
+        """
+        limit = self.config.incline_rate * dt
+        turn = float(np.clip(self.incline_target - self.incline, -limit, limit))
+        if turn == 0.0 or self.state is GaitState.FROZEN:
+            return
+        feet = self.feet_in_world.copy()
+        feet[self.swinging] = self.footholds.plan.targets[self.swinging]
+        # The feet keep the stroke governor's margin, which the feedback's corrections take up.
+        reach, margin = self.kinematics.reachable_all, self.footholds.reach_margin or 0.0
+        before, after = self._to_body(feet), self._to_body(feet, self.incline + turn)
+        leaves = reach(before) & ~reach(after)
+        leaves |= reach(before, margin) & ~reach(after, margin)
+        if not np.any(leaves):
+            self.incline += turn
 
     def _advance_gait(self, t: float) -> None:
         if self.state is GaitState.STEPPING and self.scheduler.step_over(t):
@@ -376,13 +418,12 @@ class WalkController:
             return
         s.begin_step(t, self.shaper)
         self._step_start_pose = self.pose
-        targets: npt.NDArray[np.float64] | NoFoothold = NoFoothold("no step planned")
-        for speed_scale in self.footholds.speed_scales:
-            self._step_speed_scale = speed_scale
-            nominal = self._nominal_targets()
-            targets = self.footholds.plan_step(self._context(swing), nominal, swing)
-            if not isinstance(targets, NoFoothold):
-                break
+        self._aim_incline(swing, self._nominal_targets(), s.step_duration)
+        targets = self._plan_step(swing)
+        if isinstance(targets, NoFoothold) and self._step_incline != self.incline:
+            # The inclined body may not reach footholds the body as it is reaches.
+            self.incline_target = self._step_incline = self.incline
+            targets = self._plan_step(swing)
         if isinstance(targets, NoFoothold):
             # No step started: every foot is still down. The same group tries again later.
             s.group_index, s.start_of_walk = group_before, start_before
@@ -404,6 +445,39 @@ class WalkController:
             self.footholds.swing_clearance,
         )
         self._update_floor(targets)
+
+    def _plan_step(self, swing: npt.NDArray[np.bool_]) -> npt.NDArray[np.float64] | NoFoothold:
+        """The step's footholds at the fastest speed scale that has them, or why none."""
+        targets: npt.NDArray[np.float64] | NoFoothold = NoFoothold("no step planned")
+        for speed_scale in self.footholds.speed_scales:
+            self._step_speed_scale = speed_scale
+            nominal = self._nominal_targets()
+            targets = self.footholds.plan_step(self._context(swing), nominal, swing)
+            if not isinstance(targets, NoFoothold):
+                break
+        return targets
+
+    def _aim_incline(
+        self,
+        swing: npt.NDArray[np.bool_],
+        nominal: npt.NDArray[np.float64],
+        step_duration: float,
+    ) -> None:
+        """Set the incline the body heads for, and the one it will have at touchdown.
+
+        The ground's slope along the heading under the supporting feet and under the
+        swinging legs' nominal footholds (steppable mapped cells only: a foothold over a
+        gap says nothing of the slope) sets it (:func:`~footfall.motion.incline.wanted_pitch`).
+        """
+        ground = self.feet_in_world.copy()
+        ground[:, 2] -= self.spec.foot_radius
+        ground[swing, 2] = self.footholds.steppable_ground(nominal[swing, :2])
+        slope = ground_slope(ground, self.pose)
+        self.incline_target = wanted_pitch(slope, self._level_slope, self.config.incline_limit)
+        turn = self.config.incline_rate * step_duration
+        self._step_incline = self.incline + float(
+            np.clip(self.incline_target - self.incline, -turn, turn)
+        )
 
     def _update_floor(self, targets: npt.NDArray[np.float64]) -> None:
         floor = self.footholds.floor(
@@ -441,5 +515,11 @@ class WalkController:
         twist = (self.body_velocity_in_body, self.shaper.yaw_rate * self._velocity_scale)
         feet = self.feet_in_body()
         return self.solver.solve(
-            feet, self.swinging, self.pose, self.body_feedback, twist, swing_velocity_in_world
+            feet,
+            self.swinging,
+            self.pose,
+            self.body_feedback,
+            twist,
+            swing_velocity_in_world,
+            self.incline,
         )

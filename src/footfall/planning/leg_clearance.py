@@ -20,7 +20,7 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.robot.kinematics import LegKinematics
-from footfall.robot.planar import PlanarPose
+from footfall.robot.planar import PlanarPose, inclined_to_level, level_to_inclined
 
 # Points of the leg that must clear the terrain, as fractions of the way from the knee to
 # the foot: the knee and the middle of the tibia (the lower half stands over the foothold's
@@ -31,6 +31,31 @@ TIBIA_FRACTIONS = (0.0, 0.5)
 # checked (as the swing paths do) [m].
 SWING_SAMPLES = 24
 SWING_END_RADIUS_M = 0.03
+
+
+def _inclines(poses: tuple[PlanarPose, ...], inclines: tuple[float, ...] | None) -> tuple:
+    """The body's pitch at each pose [rad]: ``inclines``, or level throughout."""
+    if inclines is None:
+        return (0.0,) * len(poses)
+    if len(inclines) != len(poses):
+        raise ValueError(f"{len(poses)} poses need as many inclines, got {len(inclines)}")
+    return tuple(inclines)
+
+
+def to_body(
+    pose: PlanarPose,
+    points: npt.NDArray[np.float64],
+    heights: npt.NDArray[np.float64],
+    incline: float = 0.0,
+) -> npt.NDArray[np.float64]:
+    """World points in the body frame at each body height, shape (..., k, 3) [m].
+
+    The body stands at ``pose`` with its origin at each of ``heights`` (world z) and
+    pitched by ``incline`` [rad] (:func:`~footfall.robot.planar.level_to_inclined`).
+    """
+    in_body = np.repeat(pose.points_to_body(points)[..., None, :], len(heights), axis=-2)
+    in_body[..., 2] -= heights
+    return level_to_inclined(in_body, incline)
 
 
 def midway(a: PlanarPose, b: PlanarPose) -> PlanarPose:
@@ -47,6 +72,7 @@ def legs_clear_heights(
     poses: tuple[PlanarPose, ...],
     heights: npt.NDArray[np.float64],
     clearance: float,
+    inclines: tuple[float, ...] | None = None,
 ) -> npt.NDArray[np.bool_]:
     """At which body heights the leg's knee and tibia stay clear of the mapped terrain.
 
@@ -59,17 +85,18 @@ def legs_clear_heights(
         poses: Body poses the foot stands under.
         heights: Body heights in the world, shape (k,) [m].
         clearance: Least gap between a link's centre line and the terrain [m].
+        inclines: The body's pitch at each pose [rad]; level when None.
 
     Returns:
         Shape (m, k).
     """
     ok = np.ones((len(feet), len(heights)), dtype=bool)
-    for pose in poses:
-        in_body = np.repeat(pose.points_to_body(feet)[:, None, :], len(heights), axis=1)
-        in_body[..., 2] -= heights
+    for pose, incline in zip(poses, _inclines(poses, inclines), strict=True):
+        in_body = to_body(pose, feet, heights, incline)
         knees = kinematics.knees_in_body(leg, in_body)
         for fraction in TIBIA_FRACTIONS:
-            point = pose.points_to_world(knees + fraction * (in_body - knees))
+            level = inclined_to_level(knees + fraction * (in_body - knees), incline)
+            point = pose.points_to_world(level)
             point[..., 2] += heights
             under = terrain_under(point[..., :2].reshape(-1, 2)).reshape(ok.shape)
             ok &= point[..., 2] >= under + clearance
@@ -83,6 +110,7 @@ def reach_heights(
     poses: tuple[PlanarPose, ...],
     heights: npt.NDArray[np.float64],
     margin: float = 0.0,
+    inclines: tuple[float, ...] | None = None,
 ) -> npt.NDArray[np.bool_]:
     """At which body heights the leg reaches world points from every pose.
 
@@ -93,15 +121,14 @@ def reach_heights(
         poses: Body poses.
         heights: Body heights in the world, shape (k,) [m].
         margin: Workspace margin [m].
+        inclines: The body's pitch at each pose [rad]; level when None.
 
     Returns:
         Shape (k,) for one point, else (..., k).
     """
     ok = np.ones((*np.shape(points)[:-1], len(heights)), dtype=bool)
-    for pose in poses:
-        in_body = np.repeat(pose.points_to_body(points)[..., None, :], len(heights), axis=-2)
-        in_body[..., 2] -= heights
-        ok &= kinematics.reachable(leg, in_body, margin)
+    for pose, incline in zip(poses, _inclines(poses, inclines), strict=True):
+        ok &= kinematics.reachable(leg, to_body(pose, points, heights, incline), margin)
     return ok
 
 
@@ -112,6 +139,7 @@ def stance_heights(
     poses: tuple[PlanarPose, PlanarPose],
     heights: npt.NDArray[np.float64],
     reach_margin: float,
+    inclines: tuple[float, float] = (0.0, 0.0),
 ) -> npt.NDArray[np.bool_]:
     """Body heights at which every supporting foot stays reached from now until touchdown.
 
@@ -125,13 +153,15 @@ def stance_heights(
         poses: The body now and at touchdown.
         heights: Body heights to test, shape (H,) [m].
         reach_margin: The planner's; the feet keep half of it, as the stroke governor does [m].
+        inclines: The body's pitch now and at touchdown [rad].
     """
     legs = np.flatnonzero(stance)
     ok = np.zeros(len(heights), dtype=bool)
-    for pose_set, margin in ((poses, 0.5 * reach_margin), (poses[:1], 0.0)):
+    for count, margin in ((2, 0.5 * reach_margin), (1, 0.0)):
         ok = np.ones(len(heights), dtype=bool)
+        pose_set, pitches = poses[:count], inclines[:count]
         for leg in legs:
-            ok &= reach_heights(kin, int(leg), feet[leg], pose_set, heights, margin)
+            ok &= reach_heights(kin, int(leg), feet[leg], pose_set, heights, margin, pitches)
         if ok.any():
             break
     return ok
@@ -146,6 +176,7 @@ def swing_reach_heights(
     poses: tuple[PlanarPose, ...],
     heights: npt.NDArray[np.float64],
     lift: float,
+    inclines: tuple[float, ...] | None = None,
 ) -> npt.NDArray[np.bool_]:
     """At which body heights the leg can lift its foot over the terrain to each end.
 
@@ -163,6 +194,7 @@ def swing_reach_heights(
         poses: Body poses the foot may be lifted from.
         heights: Body heights in the world, shape (k,) [m].
         lift: Least height of the foot's centre above the terrain on the way [m].
+        inclines: The body's pitch at each pose [rad]; level when None.
 
     Returns:
         Shape (m, k).
@@ -182,7 +214,7 @@ def swing_reach_heights(
     over = points[lifted]
     over[:, 2] = need[lifted]
     reached = np.zeros((len(over), len(heights)), dtype=bool)
-    for pose in poses:
-        reached |= reach_heights(kinematics, leg, over, (pose,), heights)
+    for pose, incline in zip(poses, _inclines(poses, inclines), strict=True):
+        reached |= reach_heights(kinematics, leg, over, (pose,), heights, 0.0, (incline,))
     np.logical_and.at(ok, np.nonzero(lifted)[0], reached)
     return ok

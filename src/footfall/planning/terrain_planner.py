@@ -31,8 +31,9 @@ from footfall.planning.leg_clearance import (
     stance_heights,
     swing_reach_heights,
 )
+from footfall.planning.step_plan import FootholdPlan, NoFoothold, StepPoses
 from footfall.robot.kinematics import LegKinematics
-from footfall.robot.planar import PlanarPose
+from footfall.robot.planar import PlanarPose, inclined_to_level
 from footfall.robot.spec import HexapodSpec
 from footfall.scoring.walkability import ScoreMap
 
@@ -77,60 +78,6 @@ class TerrainPlannerConfig:
         require_positive("planner", registration_horizon_s=self.registration_horizon_s)
         if self.body_clearance < self.min_body_clearance:
             raise ConfigError("body_clearance must be at least min_body_clearance")
-
-
-@dataclass(frozen=True)
-class StepPoses:
-    """Planned body poses that one step's footholds are checked at.
-
-    Attributes:
-        now: The body now.
-        touchdown: The body when the swinging legs touch down.
-        liftoff: The body when the swinging legs lift off again.
-        stable: Poses at which the body centre must lie inside the support polygon of the
-            legs that support after touchdown.
-    """
-
-    now: PlanarPose
-    touchdown: PlanarPose
-    liftoff: PlanarPose
-    stable: tuple[PlanarPose, ...]
-
-
-@dataclass(frozen=True)
-class NoFoothold:
-    """Why a step has no footholds.
-
-    Attributes:
-        reason: What failed, naming the leg where one leg failed.
-        leg: That leg's name, or "" when the reason concerns no single leg.
-    """
-
-    reason: str
-    leg: str = ""
-
-    def __str__(self) -> str:
-        return self.reason
-
-
-@dataclass(frozen=True)
-class FootholdPlan:
-    """Footholds for the swinging legs of one step.
-
-    Attributes:
-        targets: Foot-centre targets in the world, shape (6, 3) [m]; rows of legs that do
-            not swing are their current positions.
-        nominal: The nominal targets the search started from, shape (6, 3) [m].
-        adjusted: Which swinging legs were moved off their nominal cell, shape (6,).
-        body_z: The body heights in the world, ascending, at which every leg reaches its
-            foot: supporting feet now and at touchdown, the chosen footholds from the body
-            now (it may stop at any time), at touchdown and at lift-off [m].
-    """
-
-    targets: npt.NDArray[np.float64]
-    nominal: npt.NDArray[np.float64]
-    adjusted: npt.NDArray[np.bool_]
-    body_z: npt.NDArray[np.float64]
 
 
 class TerrainPlanner:
@@ -182,6 +129,18 @@ class TerrainPlanner:
         out[inside] = self.snapshot.heights[cells[inside, 0], cells[inside, 1]]
         return out
 
+    def steppable_ground(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Mapped heights at world points on cells a foot may use, NaN elsewhere [m]."""
+        heights = self.ground_height(xy)
+        if self.scores is None or self.snapshot is None:
+            return heights
+        cells = self.snapshot.cell_of(xy)
+        n = self.snapshot.size
+        inside = np.all((cells >= 0) & (cells < n), axis=-1)
+        valid = np.zeros(inside.shape, dtype=bool)
+        valid[inside] = self.scores.valid[cells[inside, 0], cells[inside, 1]]
+        return np.where(valid, heights, np.nan)
+
     def terrain_under(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Highest mapped height within a foot radius of each point [m]; -inf if unknown."""
         p = np.atleast_2d(np.asarray(xy, dtype=np.float64))
@@ -229,14 +188,21 @@ class TerrainPlanner:
         c = self.config
         r = self.spec.foot_radius
         heights = np.sort(np.atleast_1d(np.asarray(body_z, dtype=np.float64)))
+        now, step = poses.incline_now, poses.incline_step
         feasible = stance_heights(
-            self.kinematics, feet, ~swinging, (poses.now, poses.touchdown), heights, c.reach_margin
+            self.kinematics,
+            feet,
+            ~swinging,
+            (poses.now, poses.touchdown),
+            heights,
+            c.reach_margin,
+            (now, step),
         )
         if not feasible.any():
             return NoFoothold(
                 "the supporting feet are out of reach at every body height the body can take"
             )
-        lowest = self.lowest_body_z((poses.now, poses.touchdown), c.min_body_clearance)
+        lowest = self.lowest_body_z((poses.now, poses.touchdown), c.min_body_clearance, (now, step))
         feasible &= heights >= lowest
         if not feasible.any():
             return NoFoothold(
@@ -267,15 +233,17 @@ class TerrainPlanner:
                     centres: npt.NDArray[np.float64], leg: int = leg
                 ) -> npt.NDArray[np.bool_]:
                     """Heights at which the leg reaches, swings to and stands on each centre."""
-                    reach = reach_heights(kin, leg, centres, reach_poses, heights, c.reach_margin)
+                    reach = reach_heights(
+                        kin, leg, centres, reach_poses, heights, c.reach_margin, (now, step, step)
+                    )
                     lift = c.swing_clearance + r_link
                     swing_poses = (poses.now, poses.touchdown)
                     reach &= swing_reach_heights(
-                        kin, under, leg, feet[leg], centres, swing_poses, heights, lift
+                        kin, under, leg, feet[leg], centres, swing_poses, heights, lift, (now, step)
                     )
                     clearance = r_link + c.min_body_clearance
                     return reach & legs_clear_heights(
-                        kin, under, leg, centres, stance_poses, heights, clearance
+                        kin, under, leg, centres, stance_poses, heights, clearance, (step,) * 3
                     )
 
                 def first_accepted(
@@ -358,7 +326,11 @@ class TerrainPlanner:
 
     # Floor height -------------------------------------------------------------------------
     def floor_height(
-        self, ground_heights: npt.ArrayLike, pose: PlanarPose, body_height: float
+        self,
+        ground_heights: npt.ArrayLike,
+        pose: PlanarPose,
+        body_height: float,
+        incline: float = 0.0,
     ) -> float:
         """The floor the body keeps its height above (thesis §6.4).
 
@@ -370,20 +342,32 @@ class TerrainPlanner:
             ground_heights: Ground heights of the six footholds (targets and stance) [m].
             pose: Body pose.
             body_height: Commanded body height above the floor [m].
+            incline: The body's pitch [rad].
         """
         top3 = np.sort(np.asarray(ground_heights, dtype=np.float64))[-3:]
-        lowest = self.lowest_body_z((pose,), self.config.body_clearance)
+        lowest = self.lowest_body_z((pose,), self.config.body_clearance, (incline,))
         return max(float(top3.mean()), lowest - body_height)
 
-    def lowest_body_z(self, poses: tuple[PlanarPose, ...], clearance: float) -> float:
+    def lowest_body_z(
+        self,
+        poses: tuple[PlanarPose, ...],
+        clearance: float,
+        inclines: tuple[float, ...] | None = None,
+    ) -> float:
         """Lowest body height keeping ``clearance`` under the body at every pose [m].
 
-        -inf where the map knows nothing under the body.
+        ``inclines``: the body's pitch at each pose [rad] (level when None): an inclined
+        body's underside dips at one end. -inf where the map knows nothing under the body.
         """
         length, width, thickness = self.spec.body_size
         u, v = np.meshgrid(np.linspace(-0.5, 0.5, 9) * length, np.linspace(-0.5, 0.5, 5) * width)
-        footprint = np.stack([u.ravel(), v.ravel()], axis=1)
-        under = np.concatenate([self.ground_height(p.points_to_world(footprint)) for p in poses])
-        if not np.isfinite(under).any():
-            return -np.inf
-        return float(np.nanmax(under)) + clearance + 0.5 * thickness
+        underside = np.stack([u.ravel(), v.ravel(), np.full(u.size, -0.5 * thickness)], axis=1)
+        lowest = -np.inf
+        for k, pose in enumerate(poses):
+            incline = 0.0 if inclines is None else inclines[k]
+            level = inclined_to_level(underside, incline)  # below the body's origin
+            under = self.ground_height(pose.points_to_world(level[:, :2]))
+            dips = -0.5 * thickness - level[:, 2]  # how far the underside dips: 0 level
+            if np.isfinite(under).any():
+                lowest = max(lowest, float(np.nanmax(under + dips)) + clearance + 0.5 * thickness)
+        return lowest

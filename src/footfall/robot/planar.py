@@ -80,3 +80,24 @@ class PlanarPose:
             fy = (vx * (1.0 - c) + vy * s) / yaw_rate
         cy, sy = math.cos(self.yaw), math.sin(self.yaw)
         return PlanarPose(self.x + cy * fx - sy * fy, self.y + sy * fx + cy * fy, self.yaw + dyaw)
+
+
+def level_to_inclined(points_in_level: npt.ArrayLike, pitch: float) -> npt.NDArray[np.float64]:
+    """Points or vectors, shape (..., 3), from the level body frame into the inclined one.
+
+    The level body frame is the planar pose's, its origin at the body's height; the
+    inclined frame is that frame turned by ``pitch`` about its y axis [rad] (positive nose
+    down, as the IMU's pitch).
+    """
+    p = np.array(points_in_level, dtype=np.float64)
+    if pitch == 0.0:
+        return p
+    c, s = math.cos(pitch), math.sin(pitch)
+    x, z = c * p[..., 0] - s * p[..., 2], s * p[..., 0] + c * p[..., 2]
+    p[..., 0], p[..., 2] = x, z
+    return p
+
+
+def inclined_to_level(points_in_inclined: npt.ArrayLike, pitch: float) -> npt.NDArray[np.float64]:
+    """Inverse of :func:`level_to_inclined`."""
+    return level_to_inclined(points_in_inclined, -pitch)
