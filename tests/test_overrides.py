@@ -202,3 +202,24 @@ def test_bench_terrain_compares_pose_sources(tmp_path, monkeypatch):
     assert "median_estimator_drift_per_m" not in rows["sim"]
     assert 0.0 <= rows["estimator"]["median_estimator_drift_per_m"] < 0.05
     assert 0.0 <= rows["estimator"]["median_estimator_heading_drift_deg_per_m"] < 2.0
+
+
+def test_a_row_no_gait_can_cross_is_declared_and_left_out_of_the_rates(tmp_path, monkeypatch):
+    """Feet of friction 0.3 hold no 20 degree ramp: that row is walked, reported
+    `impassable` with the rule's reason, and the success rates count only the 10 degree row
+    (the robot may cross it)."""
+    from footfall.sim.terrain_relief import Ramps
+
+    monkeypatch.setattr(Ramps, "sweep", (10.0, 20.0))
+    out = tmp_path / "slippery"
+    args = ["bench", "terrain", "--seeds", "1", "--seconds", "1", "--modes", "planned"]
+    args += ["--terrains", "ramps", "--set", "robot.foot_friction=0.3", "--out", str(out)]
+    assert main(args) == 0
+    bench = json.loads((out / "bench.json").read_text())
+    gentle, steep = bench["results"]
+    assert (gentle["value"], gentle["impassable"], gentle["impassable_reason"]) == (10.0, False, "")
+    assert steep["value"] == 20.0 and steep["impassable"] and steep["runs"] == 1
+    assert "friction 0.3" in steep["impassable_reason"]
+    assert bench["impassable_rows"] == 1
+    assert bench["planned_success_rate"] == gentle["successes"] / gentle["runs"]
+    assert bench["variants"][0]["runs"] == 1

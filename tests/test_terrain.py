@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
 import pytest
@@ -112,3 +114,35 @@ def test_true_scores_see_what_a_perfect_camera_would():
     x0 = wide.start_x + 5 * wide.stone
     profile = [truth.valid_at((x0 + 0.01 + 0.02 * k, -0.64 + 4.5 * wide.stone)) for k in range(8)]
     assert profile == profile[::-1] and sum(profile) > 0
+
+
+def test_only_geometry_beyond_every_gait_is_declared_impassable():
+    """The rules take the terrain's own parameters against bounds from the robot: trenches
+    and stone gaps wider than a foot can travel in one swing, ramps steeper than the feet's
+    friction holds. None of the suite's rows is declared for either built-in robot (each was
+    crossed by some walk), and a robot with slippery feet cannot hold a 20 degree ramp."""
+    from dataclasses import replace
+
+    from footfall.robot.limits import longest_step_m, steepest_slope_rad
+    from footfall.robot.spec import load_spec
+    from footfall.sim.terrains import TERRAINS, make_terrain
+
+    for name in ("default", "phantomx"):
+        spec = load_spec(name)
+        for terrain in TERRAINS:
+            kind = TERRAINS.get(terrain)
+            for value in kind.sweep or (None,):
+                params = {} if value is None else {kind.difficulty: value}
+                assert make_terrain(terrain, 0, **params).impassable_for(spec) == ""
+        # A leg reaches farther along the way than its stride, and no foot travels farther
+        # in a swing than twice that.
+        assert spec.stride_length < longest_step_m(spec) / 2 < spec.body_size[0] + 0.5
+        wide = longest_step_m(spec)
+        reason = make_terrain("gaps", 0, width=wide).impassable_for(spec)
+        assert "trenches" in reason and f"{wide:g}" in reason
+        assert make_terrain("stepping_stones", 0, gap=wide).impassable_for(spec)
+        assert not make_terrain("gaps", 0, width=wide - 2.5 * spec.foot_radius).impassable_for(spec)
+    slippery = replace(load_spec("default"), foot_friction=0.3)
+    assert math.degrees(steepest_slope_rad(slippery)) == pytest.approx(16.7, abs=0.1)
+    assert "friction 0.3" in make_terrain("ramps", slope_deg=20.0).impassable_for(slippery)
+    assert make_terrain("ramps", slope_deg=15.0).impassable_for(slippery) == ""

@@ -26,7 +26,9 @@ def add_walking_suites(kinds: argparse._SubParsersAction) -> None:
             "planning), straight (the full loop on the straight line, the thesis' behaviour) "
             "and blind; --seeds runs each. Writes bench.json and bench.png to --out. "
             "Success = reached the goal, no fall, zero invalid footholds; on the dead end, "
-            "stood still and said why."
+            "stood still and said why. A row no gait of the robot can cross (its geometry "
+            "against the robot's, e.g. trenches wider than a foot can step) is reported as "
+            "impassable and left out of the success rates."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -207,7 +209,7 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
             r["terrain"],
             f"{r['difficulty']} {r['value']:g}" if r["difficulty"] != "none" else "-",
             r["mode"],
-            f"{r['successes']}/{r['runs']}",
+            f"{r['successes']}/{r['runs']}" + (" impassable" if r["impassable"] else ""),
             str(r["falls"]),
             str(r["invalid_footholds"]),
             str(r["frozen"]),
@@ -222,6 +224,8 @@ def run_terrain(args: argparse.Namespace, console: Console) -> int:
     )
     for line in variant_lines(bench):
         console.print(line)
+    for reason in sorted({r["impassable_reason"] for r in bench["results"] if r["impassable"]}):
+        console.print(f"impassable, left out of the success rates: {reason}")
     wrote(console, paths)
     return 0
 

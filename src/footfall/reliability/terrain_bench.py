@@ -142,6 +142,26 @@ def _terrain_run(job: Job) -> dict[str, object]:
     }
 
 
+def impassable_reason(variant: Variant, terrain: str, difficulty: str, value: float) -> str:
+    """Why no gait of the variant's robot can cross the terrain at this difficulty.
+
+    :meth:`footfall.sim.terrain.Terrain.impassable_for` on the robot as the walks set it up
+    (its settings applied); "" where one may.
+    """
+    from footfall.sim.walk_request import WalkRequest, prepare_walk
+
+    job = prepare_walk(
+        WalkRequest(
+            terrain=terrain,
+            robot=variant.robot,
+            gait=variant.gait,
+            difficulty=None if difficulty == "none" else value,
+            overrides=variant.overrides,
+        )
+    )
+    return job.terrain.impassable_for(job.spec)
+
+
 def _walking_medians(outcomes: Sequence[dict]) -> dict[str, float]:
     """Medians over walks: the largest tilt, the mean speed and the largest stance slip.
 
@@ -180,6 +200,8 @@ def run_terrain_benchmark(
 
     Success = reached the goal, no fall, zero invalid footholds; on a terrain without a
     route (``Terrain.has_route`` False): stood still and said why, no fall, zero invalid.
+    A row whose geometry no gait of its robot can cross (:func:`impassable_reason`) is
+    walked and reported as ``impassable`` with the reason, and left out of the success rates.
 
     Args:
         seeds: Runs per terrain, difficulty and mode.
@@ -199,11 +221,13 @@ def run_terrain_benchmark(
 
     Returns:
         Per configuration (``results``: robot, gait, settings, terrain, difficulty, value,
-        mode): runs, successes, falls, invalid footholds, frozen runs, runs without a route,
-        the medians of the largest tilt, the speed and the largest stance slip, the reasons
-        given, the failed seeds, wall time; overall ``planned_success_rate``,
-        ``straight_success_rate`` and ``blind_success_rate``; the same, with the walking
-        medians, per robot, gait and settings (``variants``); the names set (``settings``);
+        mode): ``impassable`` and ``impassable_reason``, runs, successes, falls, invalid
+        footholds, frozen runs, runs without a route, the medians of the largest tilt, the
+        speed and the largest stance slip, the reasons given, the failed seeds, wall time;
+        overall ``planned_success_rate``, ``straight_success_rate`` and
+        ``blind_success_rate`` over the rows not impassable, and ``impassable_rows``; the
+        same, with the walking medians, per robot, gait and settings (``variants``); the
+        names set (``settings``);
         and the route planner's replan times over the planned runs.
     """
     variants = parse_variants(robots, gaits, sets)
@@ -229,9 +253,14 @@ def run_terrain_benchmark(
     with open_workers(jobs, cluster) as workers:
         runs = workers.run(_terrain_run, work, done)
     rows = []
+    reasons: dict[tuple, str] = {}  # the modes of a terrain row share the verdict
     for config in configs:
         outcomes = [runs[(*config, seed, seconds)] for seed in seed_range]
         robot, gait, overrides, name, difficulty, value, mode = config
+        if config[:-1] not in reasons:
+            variant = Variant(robot, gait, overrides)
+            reasons[config[:-1]] = impassable_reason(variant, name, difficulty, value)
+        impassable = reasons[config[:-1]]
         rows.append(
             {
                 **variant_row(Variant(robot, gait, overrides)),
@@ -239,6 +268,8 @@ def run_terrain_benchmark(
                 "difficulty": difficulty,
                 "value": value,
                 "mode": mode,
+                "impassable": bool(impassable),
+                "impassable_reason": impassable,
                 **tally(outcomes, seed_range),
                 "no_route": sum(bool(o["no_route"]) for o in outcomes),
                 **_walking_medians(outcomes),
@@ -248,7 +279,7 @@ def run_terrain_benchmark(
         )
 
     def rate(mode: str) -> float:
-        mine = [r for r in rows if r["mode"] == mode]
+        mine = [r for r in rows if r["mode"] == mode and not r["impassable"]]
         runs_of_mode = sum(r["runs"] for r in mine)
         if not runs_of_mode:
             return float("nan")
@@ -268,6 +299,7 @@ def run_terrain_benchmark(
         "terrains": [name for name, _, _ in sweep],
         "modes": list(chosen),
         "results": rows,
+        "impassable_rows": sum(r["impassable"] for r in rows),
         "settings": sorted({name for v in variants for name, _ in v.overrides}),
         "variants": [
             {**rates, **_walking_medians(of_variant[v])}

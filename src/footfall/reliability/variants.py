@@ -127,6 +127,8 @@ def variant_rates(
 ) -> list[dict[str, object]]:
     """Success rate per robot, gait and settings (and per mode, where rows have one).
 
+    Rows declared ``impassable`` (terrain the robot cannot cross) are left out.
+
     Returns:
         One dict per variant: ``robot``, ``gait``, ``settings``, ``runs``, ``successes``,
         ``falls``, ``invalid_footholds`` and ``success_rate``, and ``{mode}_success_rate``
@@ -134,7 +136,7 @@ def variant_rates(
     """
     out = []
     for variant in variants:
-        mine = [r for r in rows if r["variant"] == variant.label]
+        mine = [r for r in rows if r["variant"] == variant.label and not r.get("impassable")]
         runs = sum(r["runs"] for r in mine)
         entry: dict[str, object] = {
             **variant_row(variant),

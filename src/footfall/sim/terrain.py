@@ -21,12 +21,15 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import ConfigError
+
+if TYPE_CHECKING:
+    from footfall.robot.spec import HexapodSpec
 
 
 @dataclass(frozen=True)
@@ -102,6 +105,16 @@ class Terrain(ABC):
             return cls(**params)  # type: ignore[call-arg]
         except TypeError as exc:
             raise ConfigError(f"terrain {cls.name!r}: {exc}") from exc
+
+    def impassable_for(self, spec: HexapodSpec) -> str:
+        """Why no gait of the robot can cross this terrain ("" where one may).
+
+        Decided from the terrain's own parameters against bounds from the robot's geometry
+        (:mod:`footfall.robot.limits`), never from margins a planner adds: ``footfall bench
+        terrain`` reports such a row as ``impassable`` and leaves it out of its success
+        rates. A terrain with no such rule can always be crossed.
+        """
+        return ""
 
     @abstractmethod
     def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:

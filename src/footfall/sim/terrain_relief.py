@@ -23,6 +23,8 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.errors import ConfigError
+from footfall.robot.limits import longest_step_m, steepest_slope_rad
+from footfall.robot.spec import HexapodSpec
 from footfall.sim.terrain import Terrain, TerrainXml, height_field_xml
 from footfall.sim.terrain_obstacles import Box, boxes_height, scatter
 
@@ -32,6 +34,19 @@ VOID_Z = -1.0
 ARENA_BEHIND = 1.5
 ARENA_BEYOND = 1.0
 ARENA_HALF_WIDTH = 1.5
+
+
+def _gap_too_wide(what: str, width: float, spec: HexapodSpec) -> str:
+    """Why a gap ``width`` wide cannot be stepped over by the robot ("" if it can)."""
+    need = width + 2.0 * spec.foot_radius  # from the near edge to the far one, foot and all
+    longest = longest_step_m(spec)
+    if need <= longest:
+        return ""
+    return (
+        f"{what} {width:g} m wide need a step of {need:.3f} m from edge to edge; the "
+        f"farthest a foot of the {spec.name} robot travels in one swing is {longest:.3f} m "
+        "(twice its leg's reach along the way)"
+    )
 
 
 def _sunken_xml(
@@ -148,6 +163,10 @@ class SteppingStones(SunkenTerrain):
         """Sixty centimetres past the last stones, on the end platform."""
         return (self._end + 0.6, 0.0)
 
+    def impassable_for(self, spec: HexapodSpec) -> str:
+        """Stones farther apart than a foot can step, the stones being the only ground."""
+        return _gap_too_wide("stones", self.gap, spec)
+
 
 @dataclass(frozen=True)
 class Gaps(SunkenTerrain):
@@ -196,6 +215,10 @@ class Gaps(SunkenTerrain):
     def goal(self) -> tuple[float, float]:  # type: ignore[override]
         """Sixty centimetres onto the last platform."""
         return (self._goal_x, 0.0)
+
+    def impassable_for(self, spec: HexapodSpec) -> str:
+        """Trenches across the whole way, wider than a foot can step."""
+        return _gap_too_wide("trenches", self.width, spec)
 
 
 @dataclass(frozen=True)
@@ -300,6 +323,16 @@ class Ramps(Terrain):
     def goal(self) -> tuple[float, float]:  # type: ignore[override]
         """Half a metre past the foot of the ramp down."""
         return (self.start_x + 2 * self.run + self.landing + 0.5, 0.0)
+
+    def impassable_for(self, spec: HexapodSpec) -> str:
+        """Ramps across the whole way, steeper than the feet's friction holds."""
+        steepest = math.degrees(steepest_slope_rad(spec))
+        if self.slope_deg <= steepest:
+            return ""
+        return (
+            f"a {self.slope_deg:g} degree ramp is steeper than the {spec.name} robot's feet "
+            f"hold on (friction {spec.foot_friction:g}: {steepest:.1f} degrees)"
+        )
 
     def height(self, x: npt.ArrayLike, y: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """The ramps' surface, 0 before and after, the void off the height field [m]."""
