@@ -15,13 +15,13 @@ from footfall.motion.gait import GaitConfig
 from footfall.motion.incline import (
     FULL_RATIO,
     ground_slope,
-    height_range,
     level_slope_limit,
     wanted_pitch,
 )
 from footfall.motion.walker import WalkController
 from footfall.planning.terrain_planner import TerrainPlanner
 from footfall.robot.kinematics import LegKinematics
+from footfall.robot.limits import height_range
 from footfall.robot.planar import PlanarPose, inclined_to_level, level_to_inclined
 from footfall.robot.spec import load_spec
 from footfall.scoring.walkability import score_map

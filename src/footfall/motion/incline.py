@@ -27,6 +27,7 @@ import numpy as np
 import numpy.typing as npt
 
 from footfall.robot.kinematics import LegKinematics
+from footfall.robot.limits import height_range
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 
@@ -34,35 +35,6 @@ from footfall.robot.spec import HexapodSpec
 FULL_RATIO = 1.5
 # Ground points must spread this far along the heading to give a slope [m].
 MIN_SLOPE_SPREAD_M = 0.05
-# Spacing of the heights at which a leg's reach is sampled [m].
-_REACH_SAMPLE_M = 0.002
-
-
-def height_range(kinematics: LegKinematics, spec: HexapodSpec, margin: float) -> float:
-    """The least, over the legs, of the height range a foot reaches at its rest place [m].
-
-    The foot keeps its rest position in the ground plane and moves up and down from its
-    rest height as far as the leg reaches, ``margin`` inside its workspace, without a gap.
-    """
-    rest = spec.rest_feet_in_body()
-    span = kinematics.L2 + kinematics.L3
-    dz = np.arange(-span - spec.body_height, span, _REACH_SAMPLE_M)
-    ranges = []
-    for leg in range(6):
-        points = np.repeat(rest[leg][None], len(dz), axis=0)
-        points[:, 2] = dz
-        ok = np.asarray(kinematics.reachable(leg, points, margin))
-        start = int(np.argmin(np.abs(dz + spec.body_height)))
-        if not ok[start]:
-            return 0.0
-        low = start
-        while low > 0 and ok[low - 1]:
-            low -= 1
-        high = start
-        while high + 1 < len(dz) and ok[high + 1]:
-            high += 1
-        ranges.append(float(dz[high] - dz[low]))
-    return min(ranges)
 
 
 def level_slope_limit(

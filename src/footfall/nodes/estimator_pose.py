@@ -228,12 +228,11 @@ def start_pose(spec: HexapodSpec, state: RobotState) -> Pose:
     that does not stands at the origin, heading along x, its height that of its body over
     its feet (levelled by the IMU).
     """
-    _, pitch, roll = state.orientation_body_in_world.as_euler("ZYX")
+    attitude = state.orientation_body_in_world
     if state.position_body_in_world is not None:
-        heading = state.orientation_body_in_world.as_euler("ZYX")[0]
-        rotation = Rotation.from_euler("ZYX", [heading, pitch, roll])
-        return Pose(np.asarray(state.position_body_in_world, dtype=np.float64), rotation)
-    rotation = Rotation.from_euler("ZYX", [0.0, pitch, roll])
+        return Pose(np.asarray(state.position_body_in_world, dtype=np.float64), attitude)
+    _, pitch, roll = attitude.as_euler("ZYX")
+    rotation = Rotation.from_euler("ZYX", [0.0, pitch, roll])  # heading along x
     feet = rotation.apply(LegKinematics(spec).forward_in_body(state.joint_positions))
     height = -float(np.mean(feet[:, 2])) + spec.foot_radius
     return Pose(np.array([0.0, 0.0, height]), rotation)

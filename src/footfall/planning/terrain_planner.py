@@ -122,24 +122,24 @@ class TerrainPlanner:
         """Mapped heights at world points, NaN where unknown or off the map [m]."""
         if self.snapshot is None:
             return np.full(np.shape(xy)[:-1], np.nan)
-        cells = self.snapshot.cell_of(xy)
-        n = self.snapshot.size
-        inside = np.all((cells >= 0) & (cells < n), axis=-1)
-        out = np.full(inside.shape, np.nan)
-        out[inside] = self.snapshot.heights[cells[inside, 0], cells[inside, 1]]
-        return out
+        return self._at(xy, self.snapshot.heights, np.nan)
 
     def steppable_ground(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Mapped heights at world points on cells a foot may use, NaN elsewhere [m]."""
         heights = self.ground_height(xy)
         if self.scores is None or self.snapshot is None:
             return heights
+        return np.where(self._at(xy, self.scores.valid, False), heights, np.nan)
+
+    def _at(self, xy: npt.ArrayLike, grid: npt.NDArray, outside: object) -> npt.NDArray:
+        """A map-window grid's values at world points; ``outside`` off the window."""
+        assert self.snapshot is not None
         cells = self.snapshot.cell_of(xy)
         n = self.snapshot.size
         inside = np.all((cells >= 0) & (cells < n), axis=-1)
-        valid = np.zeros(inside.shape, dtype=bool)
-        valid[inside] = self.scores.valid[cells[inside, 0], cells[inside, 1]]
-        return np.where(valid, heights, np.nan)
+        out = np.full(inside.shape, outside, dtype=grid.dtype)
+        out[inside] = grid[cells[inside, 0], cells[inside, 1]]
+        return out
 
     def terrain_under(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Highest mapped height within a foot radius of each point [m]; -inf if unknown."""
