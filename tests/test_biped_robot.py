@@ -23,6 +23,7 @@ from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
 from footfall.sim.biped_model import biped_mjcf
 from footfall.sim.biped_sim import BipedSimulation
 from footfall.sim.biped_walk import PatternRunner, stand
+from processes import stop
 from test_zenoh_bus import free_port
 
 FEET = {"left": (0.0, 0.1, 0.0), "right": (0.0, -0.1, 0.0)}
@@ -152,6 +153,5 @@ def test_the_station_walks_archie_to_its_goal_and_archie_stops_when_it_dies():
         for station in stations:
             station.kill()
             station.wait(timeout=10)
-        robot.send_signal(signal.SIGINT)
-        robot.wait(timeout=30)
+        stop(robot)
     assert robot.returncode == 0

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -12,6 +11,7 @@ import numpy as np
 
 from footfall.messages import Ack, BipedPlan, NewMap, Obstacles, PlanningGoal, Trigger
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
+from processes import stop
 from test_zenoh_bus import free_port
 
 
@@ -73,8 +73,7 @@ def test_capture_new_map_clear_and_planning_over_the_network():
             assert len(obstacles[-1].x) == 0
             assert _ask(bus, "start_planning", PlanningGoal(3.0, 0.0)).ok
     finally:
-        robot.send_signal(signal.SIGINT)
-        robot.wait(timeout=30)
+        stop(robot)
     assert robot.returncode == 0
 
 
@@ -102,5 +101,4 @@ def test_the_biped_station_plans_to_a_clicked_goal_and_draws_the_plan():
             finally:
                 station.close()
     finally:
-        robot.send_signal(signal.SIGINT)
-        robot.wait(timeout=30)
+        stop(robot)

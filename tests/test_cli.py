@@ -4,13 +4,17 @@ from __future__ import annotations
 
 import json
 import math
+import signal
 import subprocess
 import sys
+import time
 from unittest.mock import ANY
 
 import pytest
 
 from footfall.cli import build_parser, main
+from processes import stop
+from test_zenoh_bus import free_port
 
 WALK_KEYS = {
     "distance_m",
@@ -358,3 +362,28 @@ def test_every_commands_help_loads_no_heavy_library():
             [sys.executable, "-c", script, name], capture_output=True, text=True, check=True
         )
         assert "HEAVY []" in done.stdout, (name, done.stdout)
+
+
+def test_sigusr1_prints_every_threads_stack_and_the_process_runs_on(tmp_path):
+    """`kill -USR1` on a running footfall command prints where each of its threads is (the
+    way to see where a robot that will not stop is stuck); the command carries on and
+    still ends cleanly on SIGINT."""
+    stderr = tmp_path / "stderr.txt"
+    command = [sys.executable, "-m", "footfall", "robot", "--biped", "--case", "1"]
+    command += ["--listen", f"tcp/127.0.0.1:{free_port()}", "--seconds", "60"]
+    with stderr.open("w") as err:
+        robot = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=err, text=True)
+        try:
+            said = ""
+            while "keys" not in said and robot.poll() is None:
+                said += robot.stdout.readline()  # ready once it says where it listens
+            assert "listening on" in said, said
+            robot.send_signal(signal.SIGUSR1)
+            end = time.monotonic() + 10.0
+            while "run_biped" not in stderr.read_text() and time.monotonic() < end:
+                time.sleep(0.1)
+            dump = stderr.read_text()
+            assert "most recent call first" in dump and "run_biped" in dump, dump
+            assert robot.poll() is None
+        finally:
+            assert stop(robot) == 0

@@ -5,10 +5,13 @@ from __future__ import annotations
 import datetime
 import ipaddress
 import json
+import os
+import signal
 import socket
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 
 import pytest
@@ -251,3 +254,24 @@ def test_a_station_may_send_its_commands_on_a_connection_of_their_own():
             station.close()
     with pytest.raises(ConfigError, match="connect"):
         ZenohConfig(listen=(endpoint,), command_session=True)
+
+
+def test_a_sigint_landing_on_a_network_thread_stops_the_loop():
+    """A process loop waiting on the bus stops on SIGINT whichever thread the kernel hands
+    the signal to (here a zenoh thread: the main thread blocks it while the loop runs), and
+    leaves the handlers as it found them."""
+    from footfall.runtime.scheduler import stop_on_signals
+
+    before = signal.getsignal(signal.SIGINT)
+    with stop_on_signals() as stop, ZenohBus(ZenohConfig()) as bus:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            threading.Timer(0.2, subprocess.run, (["kill", "-INT", str(os.getpid())],)).start()
+            start = time.monotonic()
+            while not stop() and time.monotonic() - start < 5.0:
+                bus.spin(0.05)
+            assert stop() and time.monotonic() - start < 2.0
+        finally:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    assert signal.getsignal(signal.SIGINT) is before
+    assert signal.set_wakeup_fd(-1) == -1  # no wakeup socket left behind

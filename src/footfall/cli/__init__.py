@@ -9,7 +9,9 @@ help asked for; ``footfall --help`` lists the commands from :mod:`footfall.cli.c
 from __future__ import annotations
 
 import argparse
+import faulthandler
 import importlib
+import signal
 import sys
 
 from footfall.cli.commands import COMMANDS
@@ -37,6 +39,19 @@ def build_parser(command: str | None = None, brief: bool = False) -> argparse.Ar
     return parser
 
 
+def _stacks_on_sigusr1() -> None:
+    """Have `kill -USR1 PID` print every thread's stack to stderr.
+
+    Where a robot or station process that will not stop is stuck, without stopping it.
+    """
+    if not hasattr(signal, "SIGUSR1"):
+        return
+    try:
+        faulthandler.register(signal.SIGUSR1, file=sys.stderr, all_threads=True)
+    except (AttributeError, OSError, ValueError):  # io.UnsupportedOperation: no file behind it
+        pass  # called in a process whose stderr is not a file (a test capturing it)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``footfall`` console script."""
     argv = sys.argv[1:] if argv is None else argv
@@ -46,6 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     else:  # no command, --help, or an unknown one: the list is all that is needed
         parser = build_parser(brief=True)
     args = parser.parse_args(argv)
+    _stacks_on_sigusr1()
     from rich.console import Console
 
     console = Console()

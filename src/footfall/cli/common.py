@@ -80,7 +80,7 @@ def wrote(console: Console, paths: list[Path]) -> None:
     """Say which files were written."""
     names = [str(p) for p in paths]
     listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
-    console.print(f"Wrote {listed}")
+    console.print(f"Wrote {listed}", soft_wrap=True)  # a path broken over lines cannot be pasted
 
 
 def add_cloud_options(p: argparse.ArgumentParser) -> None:

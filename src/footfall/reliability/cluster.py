@@ -222,7 +222,7 @@ def local_cluster(nodes: int = 2, cpus_per_node: int = 1) -> Iterator[str]:
     finally:
         for signum in (signal.SIGTERM, signal.SIGKILL):
             _signal_groups(groups, signum)
-            deadline = time.monotonic() + 10.0
+            deadline = time.monotonic() + 3.0  # Ray's raylet lingers on SIGTERM
             while _signal_groups(groups, 0) and time.monotonic() < deadline:
                 time.sleep(0.2)
         shutil.rmtree(temp, ignore_errors=True)

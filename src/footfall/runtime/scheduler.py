@@ -13,6 +13,7 @@ SIGTERM with :func:`stop_on_signals` and ends between two ticks, never in the mi
 from __future__ import annotations
 
 import signal
+import socket
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -25,17 +26,39 @@ Tick = Callable[[float], bool]
 
 @contextmanager
 def stop_on_signals() -> Iterator[Callable[[], bool]]:
-    """While inside, SIGINT and SIGTERM only ask to stop; yields whether one has."""
+    """While inside, SIGINT and SIGTERM only ask to stop; yields whether one has.
+
+    Besides the Python handler, each signal's number arrives on a socket (the interpreter's
+    wakeup fd, written by its C handler on whichever thread the signal lands): CPython
+    3.11 can leave a Python handler unrun for a long while when the signal lands on a
+    thread other than the main one (a network library's) while the main thread waits on a
+    queue, and a robot that does not stop when told is not acceptable.
+    """
     asked: list[int] = []
-    previous = {
-        s: signal.signal(s, lambda signum, frame: asked.append(signum))
-        for s in (signal.SIGINT, signal.SIGTERM)
-    }
+    wanted = (signal.SIGINT, signal.SIGTERM)
+    previous = {s: signal.signal(s, lambda signum, frame: asked.append(signum)) for s in wanted}
+    reader, writer = socket.socketpair()
+    reader.setblocking(False)
+    writer.setblocking(False)
+    previous_fd = signal.set_wakeup_fd(writer.fileno(), warn_on_full_buffer=False)
+
+    def stop() -> bool:
+        if not asked:
+            try:
+                arrived = reader.recv(64)
+            except BlockingIOError:
+                arrived = b""
+            asked.extend(s for s in arrived if s in wanted)
+        return bool(asked)
+
     try:
-        yield lambda: bool(asked)
+        yield stop
     finally:
+        signal.set_wakeup_fd(previous_fd)
         for s, handler in previous.items():
             signal.signal(s, handler)
+        reader.close()
+        writer.close()
 
 
 def _check_rate(rate_hz: float) -> float:
