@@ -502,7 +502,7 @@ def test_bench_faults_and_soak_write_their_reports(tmp_path):
     assert {s["robot"] for s in bench["map_rmse"]["surveys"]} == {"phantomx"}
     assert [(v["robot"], v["gait"]) for v in bench["variants"]] == [("phantomx", "ripple")]
     soak = tmp_path / "soak"
-    args = ["bench", "soak", "--minutes", "0.15", "--sample-seconds", "2", "--out", str(soak)]
+    args = ["bench", "soak", "--minutes", "0.1", "--sample-seconds", "1.5", "--out", str(soak)]
     assert main(args) == 0
     figures = json.loads((soak / "soak.json").read_text())
     assert len(figures["samples"]) >= 3 and figures["log_ticks_kept"] <= 2000
