@@ -187,14 +187,22 @@ class LegKinematics:
         s: float | npt.NDArray[np.float64],
         margin: float,
     ) -> npt.NDArray[np.bool_]:
-        """Reach and joint-limit test of foot positions relative to their mounts (body axes)."""
+        """Reach and joint-limit test of foot positions relative to their mounts (body axes).
+
+        A foot must also lie out from the femur joint (``r >= margin``): one tucked in under
+        the hip nears the coxa axis, where the coxa's angle is undefined and the slightest
+        move of the foot turns it by half a turn; a supporting foot the body carries in
+        there would leave the coxa's range the next tick.
+        """
         x = c * p[..., 0] + s * p[..., 1]
         y = -s * p[..., 0] + c * p[..., 1]
         z = p[..., 2]
         r = np.hypot(x, y) - self.L1
         reach = np.hypot(r, z)
-        in_reach = (abs(self.L2 - self.L3) + margin <= reach) & (
-            reach <= self.L2 + self.L3 - margin
+        in_reach = (
+            (abs(self.L2 - self.L3) + margin <= reach)
+            & (reach <= self.L2 + self.L3 - margin)
+            & (r >= margin)
         )
         t2, t3 = self._femur_tibia(r, z)
         slack = margin / self.L3
