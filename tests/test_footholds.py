@@ -310,3 +310,43 @@ def test_a_small_stone_gives_its_middle_not_its_rim_and_a_replan_keeps_the_stone
         kept_xy = (np.array(kept_cell) + 0.5) * RES
         jumped = search.needless_jump(nominal, kept_xy, new, scores, heights, 0, any_point)
         assert jumped is needless, kept_cell
+
+
+def _reference_margin(point: np.ndarray, polygon: np.ndarray) -> float:
+    """The support margin written out in NumPy: the monotone-chain hull of the distinct
+    vertices, then the least signed distance to its edges."""
+    pts = np.unique(polygon, axis=0)
+
+    def chain(ordered):
+        out: list = []
+        for p in ordered:
+            while len(out) >= 2:
+                o, a = out[-2], out[-1]
+                if (a[0] - o[0]) * (p[1] - o[1]) - (a[1] - o[1]) * (p[0] - o[0]) > 1e-15:
+                    break
+                out.pop()
+            out.append(p)
+        return out
+
+    if len(pts) < 3:
+        return -np.inf
+    hull = np.array(chain(pts)[:-1] + chain(pts[::-1])[:-1])
+    if len(hull) < 3:
+        return -np.inf
+    edges = np.roll(hull, -1, axis=0) - hull
+    normals = np.stack([edges[:, 1], -edges[:, 0]], axis=1)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    return float(np.min(-np.einsum("ij,ij->i", point - hull, normals)))
+
+
+@given(
+    st.lists(st.tuples(st.sampled_from([-0.2, 0.0, 0.1]), st.floats(-0.3, 0.3)), max_size=3),
+    st.lists(st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3)), min_size=1, max_size=6),
+    points,
+)
+@settings(max_examples=300, deadline=None)
+def test_the_compiled_support_margin_is_the_numpy_one(aligned, free, p):
+    """The compiled margin equals the NumPy reference to the last bit, for polygons of one to
+    nine vertices in any order, with repeated and collinear vertices."""
+    polygon = np.array(aligned + free + free[:1], dtype=np.float64)
+    assert point_in_polygon_margin(p, polygon) == _reference_margin(p, polygon)

@@ -247,3 +247,40 @@ def test_the_governor_stops_a_turn_before_it_carries_a_foot_under_its_hip():
         assert abs(angles[lf, 0]) < np.radians(55.0)
     in_leg = kin.body_to_leg(moved)[lf]
     assert np.hypot(in_leg[0], in_leg[1]) >= kin.L1 + margin
+
+
+def _reference_reached(kin: LegKinematics, leg: int, feet: np.ndarray, margin: float):
+    """The reach test written out in NumPy, from the leg's own inverse kinematics."""
+    p = feet - kin.mounts_in_body[leg]
+    yaw = kin.spec.mount_yaws[leg]
+    x = np.cos(yaw) * p[..., 0] + np.sin(yaw) * p[..., 1]
+    y = -np.sin(yaw) * p[..., 0] + np.cos(yaw) * p[..., 1]
+    r = np.hypot(x, y) - kin.L1
+    reach = np.hypot(r, p[..., 2])
+    ok = (abs(kin.L2 - kin.L3) + margin <= reach) & (reach <= kin.L2 + kin.L3 - margin)
+    ok &= r >= margin
+    femur, tibia = kin._femur_tibia(r, p[..., 2])
+    slack = margin / kin.L3
+    for angle, axis in ((np.arctan2(y, x), 0), (femur, 1), (tibia, 2)):
+        ok &= (angle >= kin.lower[axis] + slack) & (angle <= kin.upper[axis] - slack)
+    return ok
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    name=st.sampled_from(sorted(KINEMATICS)),
+    offsets=arrays(np.float64, (7, 6, 3), elements=st.floats(-0.3, 0.3)),
+    margin=st.floats(0.0, 0.03),
+)
+def test_the_compiled_reach_test_answers_as_numpy(name, offsets, margin):
+    """The compiled reach test gives the NumPy reference's answer for every leg and point,
+    one leg at a time and all six at once, in any leading shape."""
+    kin = KINEMATICS[name]
+    feet = kin.mounts_in_body + offsets
+    expected = np.stack([_reference_reached(kin, leg, feet[:, leg], margin) for leg in range(6)])
+    assert (kin.reachable_all(feet, margin) == expected.T).all()
+    for leg in range(6):
+        assert (kin.reachable(leg, feet[:, leg], margin) == expected[leg]).all()
+        assert kin.reachable(leg, feet[0, leg], margin) is bool(expected[leg, 0])
+    with pytest.raises(ValueError, match="shape"):
+        kin.reachable_all(feet[:, :3], margin)

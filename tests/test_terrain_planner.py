@@ -316,3 +316,42 @@ def test_a_replan_keeps_each_foothold_on_its_side_of_a_trench(default_spec):
     assert not isinstance(moved, NoFoothold), moved
     np.testing.assert_allclose(moved.targets, fresh.targets)
     assert planner.region_jumps == 0  # forced: the old region is out of reach
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    unknown=st.floats(0.0, 0.6),
+    foot_radius=st.sampled_from([0.005, 0.01, 0.012, 0.03]),
+)
+def test_terrain_under_is_the_highest_known_height_around_each_point(
+    default_spec, seed, unknown, foot_radius
+):
+    """The compiled look-up gives, for each point, the highest known height at the point and
+    a foot radius along x and y from it (cells off the window or unknown left out, -inf if
+    none is known), as the map's own cell look-up does, for points on, across and off the
+    window's edges."""
+    from dataclasses import replace
+
+    rng = np.random.default_rng(seed)
+    heights = rng.uniform(-0.2, 0.2, size=(100, 100))
+    heights[rng.random(heights.shape) < unknown] = np.nan
+    planner = _planner(replace(default_spec, foot_radius=foot_radius), heights)
+    points = rng.uniform(-1.1, 1.1, size=(7, 40, 2))
+    points[0, :3] = [(-1.0, -1.0), (1.0 - 1e-12, 0.0), (0.0, 1.0)]  # on the window's edges
+    snapshot = planner.snapshot
+    expected = np.full(points.shape[:-1], -np.inf)
+    for dx, dy in (
+        (0, 0),
+        (foot_radius, 0),
+        (-foot_radius, 0),
+        (0, foot_radius),
+        (0, -foot_radius),
+    ):
+        cells = snapshot.cell_of(points + [dx, dy])
+        inside = np.all((cells >= 0) & (cells < 100), axis=-1)
+        value = np.full(points.shape[:-1], np.nan)
+        value[inside] = heights[cells[inside, 0], cells[inside, 1]]
+        expected = np.fmax(expected, np.where(np.isnan(value), -np.inf, value))
+    np.testing.assert_array_equal(planner.terrain_under(points), expected)
+    np.testing.assert_array_equal(planner.terrain_under(points[0, 0]), expected[0, :1])

@@ -22,6 +22,7 @@ import numpy.typing as npt
 
 from footfall.checks import require_non_negative
 from footfall.errors import ConfigError
+from footfall.planning.plan_kernels import polygon_margin
 from footfall.planning.regions import Regions, steppable_regions
 from footfall.scoring.walkability import ScoreMap
 
@@ -88,42 +89,15 @@ def point_in_polygon_margin(point: npt.ArrayLike, polygon: npt.ArrayLike) -> flo
     """Signed distance from a point to the edges of a convex polygon [m].
 
     Positive inside (the distance to the nearest edge), negative outside. The polygon's
-    vertices may come in any order; their convex hull is used.
+    vertices may come in any order; their convex hull is used (compiled:
+    :func:`footfall.planning.plan_kernels.polygon_margin`).
 
     Args:
         point: Shape (2,).
         polygon: Vertices, shape (k, 2), k >= 3.
     """
-    p = np.asarray(point, dtype=np.float64)
-    hull = _convex_hull(np.asarray(polygon, dtype=np.float64))
-    if len(hull) < 3:
-        return -np.inf
-    edges = np.roll(hull, -1, axis=0) - hull
-    normals = np.stack([edges[:, 1], -edges[:, 0]], axis=1)  # outward for counter-clockwise
-    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-    return float(np.min(-np.einsum("ij,ij->i", p - hull, normals)))
-
-
-def _convex_hull(points: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
-    """Counter-clockwise convex hull (monotone chain)."""
-    pts = np.unique(points, axis=0)
-    if len(pts) < 3:
-        return pts
-
-    def cross(o, a, b) -> float:
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    lower: list = []
-    for p in pts:
-        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 1e-15:
-            lower.pop()
-        lower.append(p)
-    upper: list = []
-    for p in pts[::-1]:
-        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 1e-15:
-            upper.pop()
-        upper.append(p)
-    return np.array(lower[:-1] + upper[:-1])
+    x, y = (float(v) for v in np.asarray(point, dtype=np.float64))
+    return float(polygon_margin(x, y, np.ascontiguousarray(polygon, dtype=np.float64)))
 
 
 def registration_margin_cells(error_m: float, resolution: float) -> int:

@@ -31,6 +31,7 @@ from footfall.planning.leg_clearance import (
     stance_heights,
     swing_reach_heights,
 )
+from footfall.planning.plan_kernels import foot_ring, highest_within
 from footfall.planning.step_plan import FootholdPlan, NoFoothold, StepPoses
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose, inclined_to_level
@@ -108,6 +109,7 @@ class TerrainPlanner:
         self.registration_error_m = 0.0
         self.region_jumps = 0
         self._search: FootholdSearch | None = None
+        self._ring = foot_ring(spec.foot_radius)
 
     def update(self, snapshot: MapSnapshot, scores: ScoreMap) -> None:
         """Take a new map and its scores."""
@@ -143,11 +145,17 @@ class TerrainPlanner:
 
     def terrain_under(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Highest mapped height within a foot radius of each point [m]; -inf if unknown."""
-        p = np.atleast_2d(np.asarray(xy, dtype=np.float64))
-        r = self.spec.foot_radius
-        rings = np.array([(0.0, 0.0), (r, 0.0), (-r, 0.0), (0.0, r), (0.0, -r)])
-        heights = self.ground_height(p[None] + rings.reshape((5,) + (1,) * (p.ndim - 1) + (2,)))
-        return np.where(np.isnan(heights), -np.inf, heights).max(axis=0)
+        p = np.ascontiguousarray(np.atleast_2d(np.asarray(xy, dtype=np.float64)))
+        if self.snapshot is None:
+            return np.full(p.shape[:-1], -np.inf)
+        snapshot = self.snapshot
+        points = p.reshape(-1, 2)
+        out = np.empty(len(points))
+        ox, oy = (float(v) for v in snapshot.origin)
+        highest_within(
+            points, self._ring, snapshot.heights, ox, oy, float(snapshot.resolution), out
+        )
+        return out.reshape(p.shape[:-1])
 
     # Footholds ----------------------------------------------------------------------------
     def plan(

@@ -48,6 +48,13 @@ class LegKinematics:
         self._sin_yaw = np.sin(yaws)
         self.lower = spec.limits.lower
         self.upper = spec.limits.upper
+        # Compiled on first use; imported here, not with the module, so a command's --help
+        # that names the gaits does not load numba.
+        from footfall.robot.reach_kernel import leg_geometry, reached
+
+        self._reach_kernel = reached
+        self._geometry = leg_geometry(self.mounts_in_body, yaws)
+        self._lengths = np.array([self.L1, self.L2, self.L3])
 
     # Frames ---------------------------------------------------------------------------
     def body_to_leg(self, points_in_body: npt.ArrayLike) -> npt.NDArray[np.float64]:
@@ -151,6 +158,12 @@ class LegKinematics:
     ) -> bool | npt.NDArray[np.bool_]:
         """Whether one leg reaches foot positions within its joint limits.
 
+        A foot must also lie out from the femur joint by ``margin``: one tucked in under the
+        hip nears the coxa axis, where the coxa's angle is undefined and the slightest move
+        of the foot turns it by half a turn; a supporting foot the body carries in there
+        would leave the coxa's range the next tick. (Compiled:
+        :mod:`footfall.robot.reach_kernel`.)
+
         Args:
             leg: Leg index.
             foot_in_body: Foot target in the body frame, shape (3,), or several, shape
@@ -161,8 +174,7 @@ class LegKinematics:
         Returns:
             A bool for one target, else a bool array of shape (...).
         """
-        p = np.asarray(foot_in_body, dtype=np.float64) - self.mounts_in_body[leg]
-        ok = self._reached(p, self._cos_yaw[leg], self._sin_yaw[leg], margin)
+        ok = self._reached(foot_in_body, int(leg), margin)
         return bool(ok) if np.ndim(ok) == 0 else ok
 
     def reachable_all(
@@ -177,40 +189,19 @@ class LegKinematics:
         Returns:
             Shape (..., 6).
         """
-        p = np.asarray(feet_in_body, dtype=np.float64) - self.mounts_in_body
-        return np.asarray(self._reached(p, self._cos_yaw, self._sin_yaw, margin))
+        return self._reached(feet_in_body, -1, margin)
 
-    def _reached(
-        self,
-        p: npt.NDArray[np.float64],
-        c: float | npt.NDArray[np.float64],
-        s: float | npt.NDArray[np.float64],
-        margin: float,
-    ) -> npt.NDArray[np.bool_]:
-        """Reach and joint-limit test of foot positions relative to their mounts (body axes).
-
-        A foot must also lie out from the femur joint (``r >= margin``): one tucked in under
-        the hip nears the coxa axis, where the coxa's angle is undefined and the slightest
-        move of the foot turns it by half a turn; a supporting foot the body carries in
-        there would leave the coxa's range the next tick.
-        """
-        x = c * p[..., 0] + s * p[..., 1]
-        y = -s * p[..., 0] + c * p[..., 1]
-        z = p[..., 2]
-        r = np.hypot(x, y) - self.L1
-        reach = np.hypot(r, z)
-        in_reach = (
-            (abs(self.L2 - self.L3) + margin <= reach)
-            & (reach <= self.L2 + self.L3 - margin)
-            & (r >= margin)
+    def _reached(self, feet_in_body: npt.ArrayLike, leg: int, margin: float):
+        """The compiled reach test of foot positions of one leg (or of all six, ``leg`` -1)."""
+        p = np.ascontiguousarray(feet_in_body, dtype=np.float64)
+        if leg < 0 and (p.ndim < 2 or p.shape[-2] != len(self.names)):
+            raise ValueError(f"feet of all legs need shape (..., 6, 3), got {p.shape}")
+        points = p.reshape(-1, 3)
+        out = np.empty(len(points), dtype=np.bool_)
+        self._reach_kernel(
+            points, leg, self._geometry, self._lengths, self.lower, self.upper, margin, out
         )
-        t2, t3 = self._femur_tibia(r, z)
-        slack = margin / self.L3
-        low, high = self.lower + slack, self.upper - slack
-        ok = in_reach
-        for angle, axis in ((np.arctan2(y, x), 0), (t2, 1), (t3, 2)):
-            ok = ok & (angle >= low[axis]) & (angle <= high[axis])
-        return ok
+        return out.reshape(p.shape[:-1])
 
     def _femur_tibia(
         self, r: npt.NDArray[np.float64], z: npt.NDArray[np.float64]
