@@ -204,19 +204,21 @@ def test_reachable_all_agrees_with_each_leg(default_spec, offsets, margin):
     offset=arrays(np.float64, (3,), elements=st.floats(-0.25, 0.25)),
     margin=st.floats(0.0, 0.03),
 )
-def test_a_reached_foot_lies_out_from_the_femur_joint_and_solves(name, leg, offset, margin):
-    """Whatever the reach test accepts, inverse kinematics solves within the joint limits,
-    with the foot at least ``margin`` out from the femur joint: never tucked in near the
-    coxa axis, where the coxa's angle flips by half a turn as the foot crosses it."""
+def test_a_foot_reached_clear_of_the_hip_lies_out_from_the_femur_joint(name, leg, offset, margin):
+    """Whatever the reach test accepts, inverse kinematics solves within the joint limits;
+    asked to keep clear of the hip, the foot lies out from the femur joint: never tucked in
+    near the coxa axis, where the coxa's angle flips by half a turn as the foot crosses it."""
     kin = KINEMATICS[name]
     foot = kin.mounts_in_body[leg] + offset
-    if not kin.reachable(leg, foot, margin):
+    clear = kin.reachable(leg, foot, margin, clear_of_hip=True)
+    assert kin.reachable(leg, foot, margin) or not clear
+    if not clear:
         return
     feet = SPECS[name].rest_feet_in_body()
     feet[leg] = foot
     kin.inverse_in_body(feet)
     in_leg = kin.body_to_leg(feet)[leg]
-    assert np.hypot(in_leg[0], in_leg[1]) >= kin.L1 + margin - 1e-12
+    assert np.hypot(in_leg[0], in_leg[1]) >= kin.L1 - 1e-12
 
 
 def test_the_governor_stops_a_turn_before_it_carries_a_foot_under_its_hip():
@@ -246,10 +248,12 @@ def test_the_governor_stops_a_turn_before_it_carries_a_foot_under_its_hip():
         angles = kin.inverse_in_body(moved)
         assert abs(angles[lf, 0]) < np.radians(55.0)
     in_leg = kin.body_to_leg(moved)[lf]
-    assert np.hypot(in_leg[0], in_leg[1]) >= kin.L1 + margin
+    assert np.hypot(in_leg[0], in_leg[1]) >= kin.L1
 
 
-def _reference_reached(kin: LegKinematics, leg: int, feet: np.ndarray, margin: float):
+def _reference_reached(
+    kin: LegKinematics, leg: int, feet: np.ndarray, margin: float, clear_of_hip: bool
+):
     """The reach test written out in NumPy, from the leg's own inverse kinematics."""
     p = feet - kin.mounts_in_body[leg]
     yaw = kin.spec.mount_yaws[leg]
@@ -258,7 +262,8 @@ def _reference_reached(kin: LegKinematics, leg: int, feet: np.ndarray, margin: f
     r = np.hypot(x, y) - kin.L1
     reach = np.hypot(r, p[..., 2])
     ok = (abs(kin.L2 - kin.L3) + margin <= reach) & (reach <= kin.L2 + kin.L3 - margin)
-    ok &= r >= margin
+    if clear_of_hip:
+        ok &= r >= 0.0
     femur, tibia = kin._femur_tibia(r, p[..., 2])
     slack = margin / kin.L3
     for angle, axis in ((np.arctan2(y, x), 0), (femur, 1), (tibia, 2)):
@@ -271,16 +276,19 @@ def _reference_reached(kin: LegKinematics, leg: int, feet: np.ndarray, margin: f
     name=st.sampled_from(sorted(KINEMATICS)),
     offsets=arrays(np.float64, (7, 6, 3), elements=st.floats(-0.3, 0.3)),
     margin=st.floats(0.0, 0.03),
+    clear=st.booleans(),
 )
-def test_the_compiled_reach_test_answers_as_numpy(name, offsets, margin):
+def test_the_compiled_reach_test_answers_as_numpy(name, offsets, margin, clear):
     """The compiled reach test gives the NumPy reference's answer for every leg and point,
     one leg at a time and all six at once, in any leading shape."""
     kin = KINEMATICS[name]
     feet = kin.mounts_in_body + offsets
-    expected = np.stack([_reference_reached(kin, leg, feet[:, leg], margin) for leg in range(6)])
-    assert (kin.reachable_all(feet, margin) == expected.T).all()
+    expected = np.stack(
+        [_reference_reached(kin, leg, feet[:, leg], margin, clear) for leg in range(6)]
+    )
+    assert (kin.reachable_all(feet, margin, clear) == expected.T).all()
     for leg in range(6):
-        assert (kin.reachable(leg, feet[:, leg], margin) == expected[leg]).all()
-        assert kin.reachable(leg, feet[0, leg], margin) is bool(expected[leg, 0])
+        assert (kin.reachable(leg, feet[:, leg], margin, clear) == expected[leg]).all()
+        assert kin.reachable(leg, feet[0, leg], margin, clear) is bool(expected[leg, 0])
     with pytest.raises(ValueError, match="shape"):
         kin.reachable_all(feet[:, :3], margin)

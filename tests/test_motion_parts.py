@@ -315,7 +315,7 @@ def test_a_foot_sent_back_never_lands_out_of_reach(default_spec):
     planned = policy.plan_step(before, lifted_from - [0.06, 0.0, 0.0], swing)  # backwards
     assert not isinstance(planned, NoFoothold)
     planned = planned.copy()
-    now = replace(before, pose=PlanarPose(0.1, 0.0, 0.0))  # walked on 10 cm, as commanded
+    now = replace(before, pose=PlanarPose(-0.1, 0.0, 0.0))  # the body walked on 10 cm
     kin = LegKinematics(spec)
 
     def reaches(leg, foot_in_world):

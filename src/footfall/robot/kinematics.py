@@ -154,15 +154,11 @@ class LegKinematics:
         return angles
 
     def reachable(
-        self, leg: int, foot_in_body: npt.ArrayLike, margin: float = 0.0
+        self, leg: int, foot_in_body: npt.ArrayLike, margin: float = 0.0, clear_of_hip: bool = False
     ) -> bool | npt.NDArray[np.bool_]:
         """Whether one leg reaches foot positions within its joint limits.
 
-        A foot must also lie out from the femur joint by ``margin``: one tucked in under the
-        hip nears the coxa axis, where the coxa's angle is undefined and the slightest move
-        of the foot turns it by half a turn; a supporting foot the body carries in there
-        would leave the coxa's range the next tick. (Compiled:
-        :mod:`footfall.robot.reach_kernel`.)
+        (Compiled: :mod:`footfall.robot.reach_kernel`.)
 
         Args:
             leg: Leg index.
@@ -170,28 +166,34 @@ class LegKinematics:
                 (..., 3) [m].
             margin: Keep this far inside the workspace boundary [m] (reach) and
                 ``margin / L3`` radians inside the joint limits.
+            clear_of_hip: Also require the foot out from the femur joint. A foot tucked in
+                under the hip nears the coxa axis, where the coxa's angle is undefined and
+                the slightest move of the foot turns it by half a turn: a supporting foot
+                the body carries in there leaves the coxa's range the next tick (the
+                stroke governor asks this).
 
         Returns:
             A bool for one target, else a bool array of shape (...).
         """
-        ok = self._reached(foot_in_body, int(leg), margin)
+        ok = self._reached(foot_in_body, int(leg), margin, clear_of_hip)
         return bool(ok) if np.ndim(ok) == 0 else ok
 
     def reachable_all(
-        self, feet_in_body: npt.ArrayLike, margin: float = 0.0
+        self, feet_in_body: npt.ArrayLike, margin: float = 0.0, clear_of_hip: bool = False
     ) -> npt.NDArray[np.bool_]:
         """Whether each leg reaches its foot target: :meth:`reachable` for all six at once.
 
         Args:
             feet_in_body: One target per leg, shape (..., 6, 3) [m].
             margin: As for :meth:`reachable`.
+            clear_of_hip: As for :meth:`reachable`.
 
         Returns:
             Shape (..., 6).
         """
-        return self._reached(feet_in_body, -1, margin)
+        return self._reached(feet_in_body, -1, margin, clear_of_hip)
 
-    def _reached(self, feet_in_body: npt.ArrayLike, leg: int, margin: float):
+    def _reached(self, feet_in_body: npt.ArrayLike, leg: int, margin: float, clear_of_hip: bool):
         """The compiled reach test of foot positions of one leg (or of all six, ``leg`` -1)."""
         p = np.ascontiguousarray(feet_in_body, dtype=np.float64)
         if leg < 0 and (p.ndim < 2 or p.shape[-2] != len(self.names)):
@@ -199,7 +201,15 @@ class LegKinematics:
         points = p.reshape(-1, 3)
         out = np.empty(len(points), dtype=np.bool_)
         self._reach_kernel(
-            points, leg, self._geometry, self._lengths, self.lower, self.upper, margin, out
+            points,
+            leg,
+            self._geometry,
+            self._lengths,
+            self.lower,
+            self.upper,
+            margin,
+            clear_of_hip,
+            out,
         )
         return out.reshape(p.shape[:-1])
 
