@@ -53,8 +53,13 @@ class LegKinematics:
         from footfall.robot.reach_kernel import leg_geometry, reached
 
         self._reach_kernel = reached
-        self._geometry = leg_geometry(self.mounts_in_body, yaws)
-        self._lengths = np.array([self.L1, self.L2, self.L3])
+        lengths = np.array([self.L1, self.L2, self.L3])
+        self._reach_geometry = (
+            leg_geometry(self.mounts_in_body, yaws),
+            lengths,
+            self.lower,
+            self.upper,
+        )
 
     # Frames ---------------------------------------------------------------------------
     def body_to_leg(self, points_in_body: npt.ArrayLike) -> npt.NDArray[np.float64]:
@@ -156,9 +161,7 @@ class LegKinematics:
     def reachable(
         self, leg: int, foot_in_body: npt.ArrayLike, margin: float = 0.0, clear_of_hip: bool = False
     ) -> bool | npt.NDArray[np.bool_]:
-        """Whether one leg reaches foot positions within its joint limits.
-
-        (Compiled: :mod:`footfall.robot.reach_kernel`.)
+        """Whether one leg reaches foot positions within its joint limits (compiled).
 
         Args:
             leg: Leg index.
@@ -166,11 +169,9 @@ class LegKinematics:
                 (..., 3) [m].
             margin: Keep this far inside the workspace boundary [m] (reach) and
                 ``margin / L3`` radians inside the joint limits.
-            clear_of_hip: Also require the foot out from the femur joint. A foot tucked in
-                under the hip nears the coxa axis, where the coxa's angle is undefined and
-                the slightest move of the foot turns it by half a turn: a supporting foot
-                the body carries in there leaves the coxa's range the next tick (the
-                stroke governor asks this).
+            clear_of_hip: Also require the foot out from the femur joint, off the coxa axis
+                where the slightest move of the foot turns the coxa half a turn (asked by
+                the stroke governor, for the supporting feet).
 
         Returns:
             A bool for one target, else a bool array of shape (...).
@@ -200,17 +201,7 @@ class LegKinematics:
             raise ValueError(f"feet of all legs need shape (..., 6, 3), got {p.shape}")
         points = p.reshape(-1, 3)
         out = np.empty(len(points), dtype=np.bool_)
-        self._reach_kernel(
-            points,
-            leg,
-            self._geometry,
-            self._lengths,
-            self.lower,
-            self.upper,
-            margin,
-            clear_of_hip,
-            out,
-        )
+        self._reach_kernel(points, leg, *self._reach_geometry, margin, clear_of_hip, out)
         return out.reshape(p.shape[:-1])
 
     def _femur_tibia(
