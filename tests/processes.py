@@ -1,10 +1,29 @@
-"""Stopping the footfall processes a test starts, and saying where one is stuck."""
+"""Reading from and stopping the footfall processes a test starts, and saying where one is stuck."""
 
 from __future__ import annotations
 
+import select
 import signal
 import subprocess
 import time
+
+
+def read_until(process: subprocess.Popen, text: str, timeout_s: float = 60.0) -> str:
+    """What ``process`` says on its stdout (a text pipe) up to the first line holding ``text``.
+
+    Fails, with what it said, when it says nothing more for ``timeout_s`` or ends first: a
+    process that hangs before it is ready fails the test instead of hanging it.
+    """
+    said = ""
+    end = time.monotonic() + timeout_s
+    while text not in said:
+        ready, _, _ = select.select([process.stdout], [], [], max(end - time.monotonic(), 0.0))
+        line = process.stdout.readline() if ready else None
+        if not line:
+            state = "said nothing more" if line is None else f"ended ({process.poll()})"
+            raise AssertionError(f"{process.args} {state} before {text!r}; it said: {said!r}")
+        said += line
+    return said
 
 
 def stop(process: subprocess.Popen, timeout_s: float = 30.0) -> int:

@@ -13,7 +13,7 @@ from unittest.mock import ANY
 import pytest
 
 from footfall.cli import build_parser, main
-from processes import stop
+from processes import read_until, stop
 from test_zenoh_bus import free_port
 
 WALK_KEYS = {
@@ -374,9 +374,7 @@ def test_sigusr1_prints_every_threads_stack_and_the_process_runs_on(tmp_path):
     with stderr.open("w") as err:
         robot = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=err, text=True)
         try:
-            said = ""
-            while "keys" not in said and robot.poll() is None:
-                said += robot.stdout.readline()  # ready once it says where it listens
+            said = read_until(robot, "keys")  # ready once it says where it listens
             assert "listening on" in said, said
             robot.send_signal(signal.SIGUSR1)
             end = time.monotonic() + 10.0

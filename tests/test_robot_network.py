@@ -28,6 +28,7 @@ from footfall.messages import (
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig
 from footfall.sim.task import TerrainTask
 from footfall.sim.terrains import make_terrain
+from processes import read_until
 from test_zenoh_bus import free_port
 
 
@@ -191,7 +192,7 @@ def test_killing_the_client_mid_walk_stands_the_robot_still_and_a_new_one_resume
             client = subprocess.Popen(
                 [sys.executable, "-c", CLIENT, endpoint], stdout=subprocess.PIPE, text=True
             )
-            assert client.stdout.readline().strip() == "walking"
+            assert read_until(client, "walking", 60.0).strip() == "walking"
             assert wait_for(bus, lambda: seen.status[-1].steps_taken >= 4, 30.0)
             client.kill()
             client.wait(timeout=10)

@@ -19,6 +19,7 @@ import pytest
 from footfall.errors import ConfigError
 from footfall.messages import LogLine, ModeCommand, WalkCommand
 from footfall.runtime.zenoh_bus import ZenohBus, ZenohConfig, is_loopback
+from processes import read_until
 
 
 def free_port() -> int:
@@ -67,7 +68,7 @@ def test_two_processes_exchange_messages_and_services_over_loopback():
         [sys.executable, "-c", ECHO, endpoint], stdout=subprocess.PIPE, text=True
     )
     try:
-        assert echo.stdout.readline().strip() == "ready"
+        assert read_until(echo, "ready", 60.0).strip() == "ready"
         with ZenohBus(ZenohConfig(robot="echo", connect=(endpoint,))) as bus:
             lines: list[LogLine] = []
             bus.subscribe("log", lines.append)
