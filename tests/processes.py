@@ -20,7 +20,7 @@ def read_until(process: subprocess.Popen, text: str, timeout_s: float = 60.0) ->
         ready, _, _ = select.select([process.stdout], [], [], max(end - time.monotonic(), 0.0))
         line = process.stdout.readline() if ready else None
         if not line:
-            state = "said nothing more" if line is None else f"ended ({process.poll()})"
+            state = "said nothing more" if line is None else f"ended ({process.wait(10)})"
             raise AssertionError(f"{process.args} {state} before {text!r}; it said: {said!r}")
         said += line
     return said
