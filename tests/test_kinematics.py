@@ -197,63 +197,7 @@ def test_reachable_all_agrees_with_each_leg(default_spec, offsets, margin):
     assert kin.reachable_all(feet, margin).tolist() == expected
 
 
-@settings(max_examples=200, deadline=None)
-@given(
-    name=st.sampled_from(sorted(KINEMATICS)),
-    leg=st.integers(0, 5),
-    offset=arrays(np.float64, (3,), elements=st.floats(-0.25, 0.25)),
-    margin=st.floats(0.0, 0.03),
-)
-def test_a_foot_reached_clear_of_the_hip_lies_out_from_the_femur_joint(name, leg, offset, margin):
-    """Whatever the reach test accepts, inverse kinematics solves within the joint limits;
-    asked to keep clear of the hip, the foot lies out from the femur joint: never tucked in
-    near the coxa axis, where the coxa's angle flips by half a turn as the foot crosses it."""
-    kin = KINEMATICS[name]
-    foot = kin.mounts_in_body[leg] + offset
-    clear = kin.reachable(leg, foot, margin, clear_of_hip=True)
-    assert kin.reachable(leg, foot, margin) or not clear
-    if not clear:
-        return
-    feet = SPECS[name].rest_feet_in_body()
-    feet[leg] = foot
-    kin.inverse_in_body(feet)
-    in_leg = kin.body_to_leg(feet)[leg]
-    assert np.hypot(in_leg[0], in_leg[1]) >= kin.L1 - 1e-12
-
-
-def test_the_governor_stops_a_turn_before_it_carries_a_foot_under_its_hip():
-    """The PhantomX turning left while it walks carries its left front supporting foot
-    inwards, straight at the coxa axis (as on its stairs and course walks, which froze
-    with the coxa asked for -146 degrees). The stroke governor slows the body so the foot
-    stops short of the femur joint, and the leg solves every tick of the way."""
-    from footfall.motion.gait import GaitConfig
-    from footfall.motion.stroke_governor import StrokeGovernor
-
-    spec = SPECS["phantomx"]
-    kin = KINEMATICS["phantomx"]
-    lf = spec.leg_names.index("LF")
-    feet = spec.rest_feet_in_body()
-    feet[:, 2] += spec.foot_radius
-    mount = kin.mounts_in_body[lf]
-    # The foot's drift points from where it stands through its coxa axis and 3 cm beyond.
-    drift = (mount - feet[lf])[:2] * (1.0 + 0.03 / np.hypot(*(mount - feet[lf])[:2]))
-    gait = GaitConfig(kind="tripod").for_robot(spec.stride_length, spec.max_step_height)
-    margin = 0.01
-    governor = StrokeGovernor(gait, kin, spec.rest_feet_in_body(), margin)
-    k = governor.reach_scale(lf, feet[lf], drift)
-    assert 0.0 < k < 1.0
-    for share in np.linspace(0.0, k, 50):
-        moved = feet.copy()
-        moved[lf, :2] += share * drift
-        angles = kin.inverse_in_body(moved)
-        assert abs(angles[lf, 0]) < np.radians(55.0)
-    in_leg = kin.body_to_leg(moved)[lf]
-    assert np.hypot(in_leg[0], in_leg[1]) >= kin.L1
-
-
-def _reference_reached(
-    kin: LegKinematics, leg: int, feet: np.ndarray, margin: float, clear_of_hip: bool
-):
+def _reference_reached(kin: LegKinematics, leg: int, feet: np.ndarray, margin: float):
     """The reach test written out in NumPy, from the leg's own inverse kinematics."""
     p = feet - kin.mounts_in_body[leg]
     yaw = kin.spec.mount_yaws[leg]
@@ -262,8 +206,6 @@ def _reference_reached(
     r = np.hypot(x, y) - kin.L1
     reach = np.hypot(r, p[..., 2])
     ok = (abs(kin.L2 - kin.L3) + margin <= reach) & (reach <= kin.L2 + kin.L3 - margin)
-    if clear_of_hip:
-        ok &= r >= 0.0
     femur, tibia = kin._femur_tibia(r, p[..., 2])
     slack = margin / kin.L3
     for angle, axis in ((np.arctan2(y, x), 0), (femur, 1), (tibia, 2)):
@@ -276,19 +218,16 @@ def _reference_reached(
     name=st.sampled_from(sorted(KINEMATICS)),
     offsets=arrays(np.float64, (7, 6, 3), elements=st.floats(-0.3, 0.3)),
     margin=st.floats(0.0, 0.03),
-    clear=st.booleans(),
 )
-def test_the_compiled_reach_test_answers_as_numpy(name, offsets, margin, clear):
+def test_the_compiled_reach_test_answers_as_numpy(name, offsets, margin):
     """The compiled reach test gives the NumPy reference's answer for every leg and point,
     one leg at a time and all six at once, in any leading shape."""
     kin = KINEMATICS[name]
     feet = kin.mounts_in_body + offsets
-    expected = np.stack(
-        [_reference_reached(kin, leg, feet[:, leg], margin, clear) for leg in range(6)]
-    )
-    assert (kin.reachable_all(feet, margin, clear) == expected.T).all()
+    expected = np.stack([_reference_reached(kin, leg, feet[:, leg], margin) for leg in range(6)])
+    assert (kin.reachable_all(feet, margin) == expected.T).all()
     for leg in range(6):
-        assert (kin.reachable(leg, feet[:, leg], margin, clear) == expected[leg]).all()
-        assert kin.reachable(leg, feet[0, leg], margin, clear) is bool(expected[leg, 0])
+        assert (kin.reachable(leg, feet[:, leg], margin) == expected[leg]).all()
+        assert kin.reachable(leg, feet[0, leg], margin) is bool(expected[leg, 0])
     with pytest.raises(ValueError, match="shape"):
         kin.reachable_all(feet[:, :3], margin)

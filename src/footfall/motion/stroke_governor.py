@@ -3,9 +3,7 @@
 Every supporting foot must stay within reach until it lifts off. Blind, that means within
 its nominal stroke (plus a margin), which protects the legs at start-up and on command
 changes; with mapped footholds, which may sit off their nominal places, within the leg's
-workspace (checked by inverse kinematics where the foot will be at lift-off) and out from
-its femur joint: a turn that carries a supporting foot in under its hip would bring it
-onto the coxa axis, where the coxa turns half a turn for the slightest move.
+workspace (checked by inverse kinematics where the foot will be at lift-off).
 """
 
 from __future__ import annotations
@@ -75,7 +73,7 @@ class StrokeGovernor:
             # Feet that stay reached over the whole drift need no bisection.
             after = feet.copy()
             after[:, :2] += drifts
-            stance = stance & ~self.kinematics.reachable_all(after, self.reach_margin, True)
+            stance = stance & ~self.kinematics.reachable_all(after, self.reach_margin)
         for leg in np.flatnonzero(stance):
             u = drifts[leg]
             if float(u @ u) < 1e-12:
@@ -104,7 +102,7 @@ class StrokeGovernor:
         def ok(k: float) -> bool:
             p = foot.copy()
             p[:2] += k * u
-            return self.kinematics.reachable(leg, p, margin, clear_of_hip=True)
+            return self.kinematics.reachable(leg, p, margin)
 
         if ok(1.0):
             return 1.0

@@ -159,7 +159,7 @@ class LegKinematics:
         return angles
 
     def reachable(
-        self, leg: int, foot_in_body: npt.ArrayLike, margin: float = 0.0, clear_of_hip: bool = False
+        self, leg: int, foot_in_body: npt.ArrayLike, margin: float = 0.0
     ) -> bool | npt.NDArray[np.bool_]:
         """Whether one leg reaches foot positions within its joint limits (compiled).
 
@@ -169,39 +169,35 @@ class LegKinematics:
                 (..., 3) [m].
             margin: Keep this far inside the workspace boundary [m] (reach) and
                 ``margin / L3`` radians inside the joint limits.
-            clear_of_hip: Also require the foot out from the femur joint, off the coxa axis
-                where the slightest move of the foot turns the coxa half a turn (asked by
-                the stroke governor, for the supporting feet).
 
         Returns:
             A bool for one target, else a bool array of shape (...).
         """
-        ok = self._reached(foot_in_body, int(leg), margin, clear_of_hip)
+        ok = self._reached(foot_in_body, int(leg), margin)
         return bool(ok) if np.ndim(ok) == 0 else ok
 
     def reachable_all(
-        self, feet_in_body: npt.ArrayLike, margin: float = 0.0, clear_of_hip: bool = False
+        self, feet_in_body: npt.ArrayLike, margin: float = 0.0
     ) -> npt.NDArray[np.bool_]:
         """Whether each leg reaches its foot target: :meth:`reachable` for all six at once.
 
         Args:
             feet_in_body: One target per leg, shape (..., 6, 3) [m].
             margin: As for :meth:`reachable`.
-            clear_of_hip: As for :meth:`reachable`.
 
         Returns:
             Shape (..., 6).
         """
-        return self._reached(feet_in_body, -1, margin, clear_of_hip)
+        return self._reached(feet_in_body, -1, margin)
 
-    def _reached(self, feet_in_body: npt.ArrayLike, leg: int, margin: float, clear_of_hip: bool):
+    def _reached(self, feet_in_body: npt.ArrayLike, leg: int, margin: float):
         """The compiled reach test of foot positions of one leg (or of all six, ``leg`` -1)."""
         p = np.ascontiguousarray(feet_in_body, dtype=np.float64)
         if leg < 0 and (p.ndim < 2 or p.shape[-2] != len(self.names)):
             raise ValueError(f"feet of all legs need shape (..., 6, 3), got {p.shape}")
         points = p.reshape(-1, 3)
         out = np.empty(len(points), dtype=np.bool_)
-        self._reach_kernel(points, leg, *self._reach_geometry, margin, clear_of_hip, out)
+        self._reach_kernel(points, leg, *self._reach_geometry, margin, out)
         return out.reshape(p.shape[:-1])
 
     def _femur_tibia(

@@ -4,8 +4,8 @@ The foothold planner, the stroke governor and the body's height and incline ask 
 thousands of times a walk, mostly for one to a few dozen points at a time, where NumPy's
 per-call cost of some twenty array operations outweighed the arithmetic fifty times over.
 The test is :meth:`footfall.robot.kinematics.LegKinematics.reachable`'s, point by point:
-the foot within the leg's reach (``margin`` inside it), out from the femur joint where
-asked, and each joint of the knee-up solution ``margin / L3`` inside its limits.
+the foot within the leg's reach (``margin`` inside it) and each joint of the knee-up
+solution ``margin / L3`` inside its limits.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ MOUNT_X, MOUNT_Y, MOUNT_Z, COS_YAW, SIN_YAW = range(5)
 
 
 @njit(cache=True, nogil=True)
-def reached(points, leg, geometry, lengths, lower, upper, margin, clear_of_hip, out):
+def reached(points, leg, geometry, lengths, lower, upper, margin, out):
     """Fill ``out`` with whether each foot position is reached.
 
     Args:
@@ -33,7 +33,6 @@ def reached(points, leg, geometry, lengths, lower, upper, margin, clear_of_hip, 
         lower: Lower joint limits, shape (3,) [rad].
         upper: Upper joint limits, shape (3,) [rad].
         margin: Workspace margin [m].
-        clear_of_hip: Also require the foot out from the femur joint.
         out: Result, shape (n,).
     """
     l1, l2, l3 = lengths[0], lengths[1], lengths[2]
@@ -50,7 +49,7 @@ def reached(points, leg, geometry, lengths, lower, upper, margin, clear_of_hip, 
         y = -s * px + c * py
         r = math.hypot(x, y) - l1
         reach = math.hypot(r, z)
-        ok = nearest <= reach and reach <= farthest and (r >= 0.0 or not clear_of_hip)
+        ok = nearest <= reach and reach <= farthest
         if ok:
             cos_knee = (r * r + z * z - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
             t3 = -math.acos(min(max(cos_knee, -1.0), 1.0))
