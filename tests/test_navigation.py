@@ -16,9 +16,15 @@ from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
 from footfall.messages import GaitState, GaitStatus, MapUpdate, Mode, WalkCommand
 from footfall.nodes.navigation import NavigatorNode
 from footfall.planning import traversability
+from footfall.planning.footholds import FootholdConfig
 from footfall.planning.navigation import NavigationConfig, NoRoute, Route, follow_route, plan_route
 from footfall.planning.route_kernels import dijkstra, segment_points, taut_indices
-from footfall.planning.traversability import TraversabilityConfig, cost_grid, span_radius
+from footfall.planning.traversability import (
+    TraversabilityConfig,
+    cost_grid,
+    longest_gap,
+    span_radius,
+)
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import load_spec
 from footfall.runtime.bus import InProcessBus
@@ -139,7 +145,8 @@ def test_a_deep_narrow_trench_is_straddled_and_a_wide_pit_is_not(width):
     walked into nor over, but round."""
     x, y = _grid_xy()
     trench = np.where(np.abs(x - 0.5) <= width / 2, -0.3, 0.0)
-    grid = cost_grid(_update(trench), TraversabilityConfig(), SPAN)
+    step = longest_gap(SPEC, FootholdConfig().search_radius)
+    grid = cost_grid(_update(trench), TraversabilityConfig(), SPAN, max_gap_m=step)
     assert np.isfinite(grid.cost[np.abs(x - 0.5) < 0.03]).all()
     pit = np.where(np.hypot(x - 0.5, y - 0.5) <= 0.6, -0.3, 0.0)
     wide = cost_grid(_update(pit), TraversabilityConfig(), SPAN)

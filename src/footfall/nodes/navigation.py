@@ -33,6 +33,7 @@ import numpy.typing as npt
 
 from footfall.messages import GaitStatus, LogLine, MapUpdate, WalkCommand
 from footfall.nodes.stuck import StuckWatch
+from footfall.planning.footholds import FootholdConfig
 from footfall.planning.navigation import (
     NavigationConfig,
     NoRoute,
@@ -40,7 +41,13 @@ from footfall.planning.navigation import (
     follow_route,
     plan_route,
 )
-from footfall.planning.traversability import CostGrid, cost_grid, span_radius, wall_faces
+from footfall.planning.traversability import (
+    CostGrid,
+    cost_grid,
+    longest_gap,
+    span_radius,
+    wall_faces,
+)
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import HexapodSpec
 from footfall.runtime.bus import Bus
@@ -139,11 +146,13 @@ class NavigatorNode:
 
     Args:
         bus: The bus (map updates in, log lines out).
-        spec: The robot (its legs' span).
+        spec: The robot (its legs' span and stride).
         goal_in_world: Goal ``(x, y)`` [m]; None until :meth:`set_goal`.
         config: Settings.
         background: Replan on a worker thread (see the module docstring).
         meter: Charged with the node's work, on either thread.
+        foothold_search_m: The foothold search's radius [m]: with the stride, the widest
+            gap a step crosses (:func:`~footfall.planning.traversability.longest_gap`).
     """
 
     name = "navigation"
@@ -156,11 +165,13 @@ class NavigatorNode:
         config: NavigationConfig | None = None,
         background: bool = False,
         meter: CpuMeter | None = None,
+        foothold_search_m: float = FootholdConfig.search_radius,
     ) -> None:
         self.bus = bus
         self.meter = meter if meter is not None else CpuMeter()
         self.config = config or NavigationConfig()
         self.span_radius_m = span_radius(spec)
+        self.max_gap_m = longest_gap(spec, foothold_search_m)
         self.goal: tuple[float, float] | None = None
         self.route: Route | None = None
         self.no_route: NoRoute | None = None
@@ -210,7 +221,11 @@ class NavigatorNode:
     ) -> PlanOutcome:
         t0 = time.perf_counter()
         grid = cost_grid(
-            update, self.config.traversability, self.span_radius_m, self._walls.window(update)
+            update,
+            self.config.traversability,
+            self.span_radius_m,
+            self._walls.window(update),
+            self.max_gap_m,
         )
         self._walls.forget_flat(grid)
         t1 = time.perf_counter()

@@ -16,6 +16,12 @@ as a whole may stand, legs spread around it. For a body centred on a cell it che
   it, not far below the ground near it (a pit floor deeper than ``max_rise_m`` is out of
   reach). The share of known cells in the ring the feet sweep (between half the span and
   the span) without such a cell costs, and above ``max_unsupported`` is lethal.
+- **Gaps.** A foot crosses ground without footholds (a trench, a pit deeper than
+  ``max_rise_m``) in one swing, so no farther than the longest step (``max_gap_m``: the
+  stride plus the foothold search's reach forward). A body centre more than half that
+  from every usable cell, over seen ground, lies in a gap too wide to step: lethal, so a
+  trench wider than a step closes the way (no route) instead of freezing the walk at its
+  edge, and a wide pit is gone round.
 - **Unknown.** Cells not yet seen are passable but cost ``unknown_cost`` more per metre
   (times their share of the span), so routes prefer what has been seen and are replanned
   as more is.
@@ -57,6 +63,8 @@ class TraversabilityConfig:
     Attributes:
         span_radius_m: Radius of the disc the legs span around the body centre [m]; None
             takes it from the robot (see :func:`span_radius`).
+        max_gap_m: Widest gap without footholds a step crosses [m]; None takes it from
+            the robot and the foothold search (see :func:`longest_gap`).
         max_rise_m: Highest rise the legs climb as a step [m].
         wall_run_m: A rise within this horizontal run is a wall face [m].
         support_radius_m: A foot finds a foothold within this of where its leg puts it [m].
@@ -68,6 +76,7 @@ class TraversabilityConfig:
     """
 
     span_radius_m: float | None = None
+    max_gap_m: float | None = None
     max_rise_m: float = 0.10
     wall_run_m: float = 0.04
     support_radius_m: float = 0.08
@@ -87,6 +96,8 @@ class TraversabilityConfig:
         )
         if self.span_radius_m is not None:
             require_positive("traversability", span_radius_m=self.span_radius_m)
+        if self.max_gap_m is not None:
+            require_positive("traversability", max_gap_m=self.max_gap_m)
         if not 0 < self.max_unsupported <= 1:
             raise ConfigError(f"max_unsupported must lie in (0, 1], got {self.max_unsupported}")
         require_non_negative(
@@ -107,6 +118,15 @@ def span_radius(spec: HexapodSpec, margin_m: float = 0.05) -> float:
     return float(np.max(np.hypot(feet[:, 0], feet[:, 1]))) + spec.foot_radius + margin_m
 
 
+def longest_gap(spec: HexapodSpec, search_radius_m: float) -> float:
+    """The widest gap without footholds a foot steps across [m].
+
+    A swing carries the foot one stride over the ground from where it lifted; the foothold
+    search may move its landing up to ``search_radius_m`` farther on.
+    """
+    return spec.stride_length + search_radius_m
+
+
 @dataclass(frozen=True)
 class CostGrid:
     """Cost per metre of moving the body centre over each cell of a map window.
@@ -117,6 +137,7 @@ class CostGrid:
         cost: Cost per metre, at least 1; ``inf`` where lethal.
         lethal: Cells the body centre must not enter.
         wall: Wall-top cells (see the module docstring).
+        gap: Seen cells inside a gap wider than a step (see the module docstring).
         wall_top: Their tops [m], NaN elsewhere.
         flat: Cells seen flat: no wall, and no face ever within them.
         unknown_share: Share of the span around each cell not yet seen.
@@ -127,6 +148,7 @@ class CostGrid:
     cost: npt.NDArray[np.float64]
     lethal: npt.NDArray[np.bool_]
     wall: npt.NDArray[np.bool_]
+    gap: npt.NDArray[np.bool_]
     wall_top: npt.NDArray[np.float64]
     flat: npt.NDArray[np.bool_]
     unknown_share: npt.NDArray[np.float64]
@@ -194,6 +216,31 @@ def _box_mean(
     return ndimage.uniform_filter(a, size=2 * half_cells + 1, mode="constant", cval=outside)
 
 
+def _shadowed(known: npt.NDArray[np.bool_], usable: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
+    """Unseen cells that lie, along a row or a column, between two seen cells without footholds.
+
+    The floor of a deep trench is hidden from a camera looking across it, while its rims
+    and far wall are seen: what lies between them has no foothold either. An unseen run
+    with ground a foot can stand on at either end (the shadow behind a block, the edge of
+    what has been seen) may be anything and is left unknown.
+    """
+    out = np.zeros_like(known)
+    for axis in (0, 1):
+        k = np.moveaxis(known, axis, -1)
+        u = np.moveaxis(usable, axis, -1)
+        n = k.shape[-1]
+        index = np.broadcast_to(np.arange(n), k.shape)
+        before = np.maximum.accumulate(np.where(k, index, -1), axis=-1)
+        after = np.minimum.accumulate(np.where(k, index, n)[..., ::-1], axis=-1)[..., ::-1]
+        bounded = (before >= 0) & (after < n)
+        rows = np.arange(k.shape[0])[:, None]
+        blocked_before = ~u[rows, np.clip(before, 0, n - 1)]
+        blocked_after = ~u[rows, np.clip(after, 0, n - 1)]
+        shadow = ~k & bounded & blocked_before & blocked_after
+        np.moveaxis(out, axis, -1)[...] |= shadow
+    return out
+
+
 def wall_faces(update: MapUpdate, config: TraversabilityConfig) -> npt.NDArray[np.bool_]:
     """Cells more than ``max_rise_m`` above a known cell within ``wall_run_m``: wall tops."""
     heights = np.asarray(update.heights, dtype=np.float64)
@@ -208,6 +255,7 @@ def cost_grid(
     config: TraversabilityConfig,
     span_radius_m: float,
     remembered_tops: npt.NDArray[np.float64] | None = None,
+    max_gap_m: float = math.inf,
 ) -> CostGrid:
     """The cost grid of a map update (see the module docstring).
 
@@ -218,9 +266,11 @@ def cost_grid(
         remembered_tops: Wall tops found on earlier updates, on this window's cells [m]
             (NaN where none): a wall stays one until its cell is seen flat (a face seen
             obliquely may leave its cell only the face's foot as height).
+        max_gap_m: Widest gap a step crosses [m] (``config.max_gap_m`` if set wins).
     """
     res = update.resolution
     span = config.span_radius_m if config.span_radius_m is not None else span_radius_m
+    widest = config.max_gap_m if config.max_gap_m is not None else max_gap_m
     heights = np.asarray(update.heights, dtype=np.float64)
     known = np.asarray(update.known, dtype=bool) & np.isfinite(heights)
     valid = np.asarray(update.valid, dtype=bool) & known
@@ -265,6 +315,11 @@ def cost_grid(
     ) / (outer_area - inner_area)
     ring_unsupported = np.clip(ring_unsupported, 0.0, 1.0)
     lethal |= ring_unsupported > config.max_unsupported
+    gap = np.zeros_like(known)
+    if math.isfinite(widest) and usable.any():
+        to_foothold_m = ndimage.distance_transform_edt(~usable) * res
+        gap = (known | _shadowed(known, usable)) & (to_foothold_m > 0.5 * widest)
+        lethal |= gap
     unknown_share = np.clip(_box_mean((~known).astype(np.float64), span_cells, 1.0), 0.0, 1.0)
 
     cost = 1.0 + config.unknown_cost * unknown_share + config.unsupported_cost * ring_unsupported
@@ -276,6 +331,7 @@ def cost_grid(
         cost=cost,
         lethal=lethal,
         wall=wall,
+        gap=gap,
         wall_top=np.where(wall, top, np.nan),
         flat=flat,
         unknown_share=unknown_share,

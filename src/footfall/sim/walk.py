@@ -58,7 +58,12 @@ def simulate_walk(
     meter = robot.meter
     navigator = (
         NavigatorNode(
-            bus, spec, config=settings.navigation, background=settings.realtime, meter=meter
+            bus,
+            spec,
+            config=settings.navigation,
+            background=settings.realtime,
+            meter=meter,
+            foothold_search_m=settings.planner.footholds.search_radius,
         )
         if settings.navigates
         else None

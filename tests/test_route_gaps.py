@@ -1,0 +1,149 @@
+"""The route planner and gaps: a trench a step cannot span closes the way, one it can does not."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from footfall.messages import MapUpdate
+from footfall.planning.footholds import FootholdConfig
+from footfall.planning.navigation import NavigationConfig, NoRoute, Route, plan_route
+from footfall.planning.traversability import (
+    TraversabilityConfig,
+    _shadowed,
+    cost_grid,
+    longest_gap,
+    span_radius,
+)
+from footfall.robot.spec import load_spec
+
+RES = 0.02
+N = 150
+ORIGIN = (-1.0, -1.0)
+SPEC = load_spec("default")
+SPAN = span_radius(SPEC)
+STEP = longest_gap(SPEC, FootholdConfig().search_radius)
+
+
+def _trench(width: float, hidden: bool = False, until_y: float = math.inf) -> MapUpdate:
+    """Flat ground with a trench 30 cm deep across x = 0.5 m up to ``until_y``.
+
+    Its floor and walls are no foothold (``valid`` False), exactly ``width`` wide; ``hidden``
+    leaves all but the cell at either wall unseen, as a camera looking across it sees it.
+    """
+    xs = ORIGIN[0] + (np.arange(N) + 0.5) * RES
+    ys = ORIGIN[1] + (np.arange(N) + 0.5) * RES
+    x, y = np.meshgrid(xs, ys, indexing="ij")
+    inside = (np.abs(x - 0.5) < width / 2) & (y < until_y)
+    heights = np.where(inside, -0.3, 0.0)
+    if hidden:
+        inner = (np.abs(x - 0.5) < width / 2 - RES) & (y < until_y)
+        heights[inner] = np.nan
+    known = np.isfinite(heights)
+    zeros = np.zeros((N, N))
+    return MapUpdate(
+        stamp=0.0,
+        sequence=1,
+        heights=heights,
+        known=known,
+        spread=None,
+        slope=zeros,
+        proximity=zeros,
+        score=zeros,
+        valid=known & ~inside,
+        origin=ORIGIN,
+        resolution=RES,
+    )
+
+
+def _route(update: MapUpdate, max_gap_m: float = STEP) -> Route | NoRoute:
+    grid = cost_grid(update, TraversabilityConfig(), SPAN, max_gap_m=max_gap_m)
+    return plan_route(grid, (-0.6, 0.0), (1.7, 0.0), NavigationConfig())
+
+
+def test_the_longest_gap_is_the_stride_and_the_search_reach():
+    """The default robot's stride (0.15 m) and the foothold search (0.16 m): 0.31 m."""
+    assert STEP == pytest.approx(SPEC.stride_length + FootholdConfig().search_radius)
+    assert STEP == pytest.approx(0.31)
+
+
+@pytest.mark.parametrize("hidden", [False, True])
+def test_a_trench_wider_than_a_step_closes_the_way_and_a_narrower_one_does_not(hidden):
+    """A trench across the whole way a fifth narrower than the longest step is crossed
+    straight on; one a fifth wider leaves no route (the robot stands and says why rather
+    than freezing at its edge), seen whole or with its floor hidden. Without the rule the
+    wide trench would be walked into: the gap rule is what decides."""
+    narrow = _route(_trench(0.8 * STEP, hidden))
+    assert isinstance(narrow, Route)
+    assert np.abs(narrow.points_in_world[:, 1]).max() < 0.05
+    wide = _route(_trench(1.2 * STEP, hidden))
+    assert isinstance(wide, NoRoute)
+    assert "no route" in wide.reason
+    assert isinstance(_route(_trench(1.2 * STEP, hidden), max_gap_m=math.inf), Route)
+
+
+def test_a_wide_trench_with_a_way_round_is_gone_round():
+    """The same wide trench ending at y = 0.4 m: the body centre passes beyond its end,
+    never over it."""
+    route = _route(_trench(1.2 * STEP, hidden=True, until_y=0.4))
+    assert isinstance(route, Route)
+    p = route.points_in_world
+    samples = np.concatenate(
+        [a + np.linspace(0, 1, 40)[:, None] * (b - a) for a, b in itertools.pairwise(p)]
+    )
+    over = np.abs(samples[:, 0] - 0.5) < 0.6 * STEP
+    assert over.any() and samples[over, 1].min() > 0.4
+
+
+def test_the_edge_of_what_was_seen_is_no_gap():
+    """Ground seen up to a line and nothing beyond (the view's edge, or a block's shadow
+    with ground beyond it): the unseen cells stay passable."""
+    update = _trench(0.0)
+    heights = update.heights.copy()
+    heights[100:, :] = np.nan
+    heights[60:70, 40:60] = np.nan
+    known = np.isfinite(heights)
+    unseen = MapUpdate(**{**update.__dict__, "heights": heights, "known": known, "valid": known})
+    grid = cost_grid(unseen, TraversabilityConfig(), SPAN, max_gap_m=STEP)
+    assert not grid.gap.any() and not grid.lethal.any()
+
+
+def _shadowed_by_hand(known: np.ndarray, usable: np.ndarray) -> np.ndarray:
+    out = np.zeros_like(known)
+    for grid_known, grid_usable, flip in ((known, usable, False), (known.T, usable.T, True)):
+        rows, cols = grid_known.shape
+        for i in range(rows):
+            for j in range(cols):
+                if grid_known[i, j]:
+                    continue
+                left = [c for c in range(j) if grid_known[i, c]]
+                right = [c for c in range(j + 1, cols) if grid_known[i, c]]
+                if left and right and not grid_usable[i, left[-1]] and not grid_usable[i, right[0]]:
+                    if flip:
+                        out[j, i] = True
+                    else:
+                        out[i, j] = True
+    return out
+
+
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    shape=st.tuples(st.integers(1, 12), st.integers(1, 12)),
+    known_share=st.floats(0.0, 1.0),
+    usable_share=st.floats(0.0, 1.0),
+)
+@settings(max_examples=200, deadline=None)
+def test_hidden_cells_between_unusable_ones_are_found_as_a_scan_finds_them(
+    seed, shape, known_share, usable_share
+):
+    """An unseen cell is taken as no foothold exactly when, along its row or its column,
+    the nearest seen cells on both sides are no foothold: the same as scanning each line."""
+    rng = np.random.default_rng(seed)
+    known = rng.random(shape) < known_share
+    usable = known & (rng.random(shape) < usable_share)
+    assert np.array_equal(_shadowed(known, usable), _shadowed_by_hand(known, usable))
