@@ -377,6 +377,57 @@ def test_solver_targets_are_reachable_and_an_unreachable_stance_foot_raises(defa
         solver.solve(far, none, PlanarPose(), NO_FEEDBACK, ((0.0, 0.0), 0.0), np.zeros((6, 3)))
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    leg=st.integers(0, 5),
+    distance=st.floats(0.0005, 0.03),
+    bearing_deg=st.floats(-180.0, 180.0),
+)
+def test_a_supporting_foot_under_its_hip_is_turned_into_the_coxa_range(
+    default_spec, leg, distance, bearing_deg
+):
+    """A supporting foot a few millimetres from its coxa axis, on a bearing beyond the
+    coxa's range (the body's feedback swings such a coxa by tens of degrees per millimetre):
+    when turning it about the axis into the range moves it by at most NEAR_AXIS_SLIP_M, the
+    solver does so and the leg reaches it; otherwise it raises, as for any foot the leg
+    cannot reach."""
+    from footfall.motion.leg_solver import NEAR_AXIS_SLIP_M
+
+    kin = LegKinematics(default_spec)
+    solver = LegSolver(kin, default_spec.foot_radius)
+    feet = _standing(default_spec)
+    points = np.zeros((6, 3))
+    bearing = math.radians(bearing_deg)
+    points[leg] = [distance * math.cos(bearing), distance * math.sin(bearing), 0.0]
+    asked = feet.copy()
+    asked[leg, :2] = kin.leg_to_body(points)[leg, :2]
+    low, high = kin.lower[0], kin.upper[0]
+    beyond = not low <= bearing <= high
+    turn = max(low - bearing, bearing - high, 0.0)
+    slip = 2.0 * distance * math.sin(0.5 * min(turn, math.pi))
+    none = np.zeros(6, dtype=bool)
+
+    def solve():
+        return solver.solve(
+            asked, none, PlanarPose(), NO_FEEDBACK, ((0.0, 0.0), 0.0), np.zeros((6, 3))
+        )
+
+    if beyond and slip > NEAR_AXIS_SLIP_M + 1e-4:
+        with pytest.raises(UnreachableTargetError, match="coxa"):
+            solve()
+        return
+    if slip > NEAR_AXIS_SLIP_M - 1e-4 and beyond:
+        return  # on the rule's edge: either answer is right
+    out = solve().feet_in_body
+    assert np.linalg.norm(out[leg] - asked[leg]) <= NEAR_AXIS_SLIP_M + 1e-9
+    angles = kin.inverse_in_body(out)
+    assert low - 1e-9 <= angles[leg, 0] <= high + 1e-9
+    others = np.arange(6) != leg
+    np.testing.assert_allclose(out[others], asked[others], atol=1e-12)
+    if not beyond:
+        np.testing.assert_allclose(out[leg], asked[leg], atol=1e-12)
+
+
 def test_solver_rates_are_the_feet_moving_against_the_body(default_spec):
     """With the body moving at v, a planted foot moves at -v in the body frame."""
     solver = LegSolver(LegKinematics(default_spec), default_spec.foot_radius)

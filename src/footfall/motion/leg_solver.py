@@ -6,6 +6,12 @@ each stance foot's contact point still as its round foot rolls, and gives the fe
 body-frame rates. A supporting foot out of reach raises
 :class:`~footfall.errors.UnreachableTargetError`: the controller then freezes.
 
+A supporting foot right under its hip is the exception. There the coxa's angle is that of a
+vector of almost no length: a millimetre of the body's feedback swings it by tens of
+degrees, past its range, though the coxa's angle hardly moves the foot. Such a foot is
+turned about the coxa axis into the range when that moves it by at most
+``NEAR_AXIS_SLIP_M``, instead of freezing the robot for a slip it would not feel.
+
 A round foot rolls as its tibia tilts during stance: holding the sphere's centre still
 would make it slide by ``r * dpsi`` (``psi`` the tibia's pitch). So the solver keeps the
 *contact point* still instead, moving the commanded centre by the rolling displacement
@@ -29,6 +35,8 @@ from footfall.robot.planar import PlanarPose, inclined_to_level, level_to_inclin
 _DRAWN_IN_SLACK = 1e-4
 # A swinging foot out of reach is lowered in steps of this until the leg reaches it [m].
 _LOWERING_STEP = 0.005
+# A supporting foot beyond its coxa's range is turned into it if that moves it this little [m].
+NEAR_AXIS_SLIP_M = 0.003
 
 
 @dataclass(frozen=True)
@@ -138,6 +146,28 @@ class LegSolver:
         points[leg] = [radius * math.cos(yaw), radius * math.sin(yaw), in_leg[2]]
         return self.kinematics.leg_to_body(points)[leg]
 
+    def near_axis_in_range(
+        self, feet_in_body: npt.NDArray[np.float64], stance: npt.NDArray[np.bool_]
+    ) -> npt.NDArray[np.float64]:
+        """Supporting feet beyond their coxa's range turned into it, where that hardly moves them.
+
+        A foot within ``NEAR_AXIS_SLIP_M`` of where its leg reaches with the coxa at its
+        range's edge (a foot under its hip) is moved there; any other foot is left as asked
+        (the inverse kinematics then refuses it).
+        """
+        k = self.kinematics
+        in_leg = k.body_to_leg(feet_in_body)
+        yaw = np.arctan2(in_leg[:, 1], in_leg[:, 0])
+        beyond = stance & ((yaw < k.lower[0]) | (yaw > k.upper[0]))
+        if not beyond.any():
+            return feet_in_body
+        out = feet_in_body.copy()
+        for leg in np.flatnonzero(beyond):
+            turned = self.within_coxa_range(int(leg), feet_in_body[leg])
+            if float(np.linalg.norm(turned - feet_in_body[leg])) <= NEAR_AXIS_SLIP_M:
+                out[leg] = turned
+        return out
+
     def solve(
         self,
         feet_in_body: npt.NDArray[np.float64],
@@ -171,9 +201,9 @@ class LegSolver:
             tilt = Rotation.from_euler("xy", feedback.tilt_correction)
             anchors = anchors @ tilt.as_matrix()
         anchors = self.within_reach(anchors, swinging)
-        feet = anchors
-        angles = self.kinematics.inverse_in_body(feet)
         stance = ~swinging
+        feet = self.near_axis_in_range(anchors, stance)
+        angles = self.kinematics.inverse_in_body(feet)
         pitch = angles[:, 1] + angles[:, 2]
         new = stance & np.isnan(self._tibia_pitch_at_touchdown)
         self._tibia_pitch_at_touchdown[new] = pitch[new]
@@ -185,7 +215,7 @@ class LegSolver:
             rolling_in_body = (
                 self.kinematics.leg_to_body(rolling_in_leg) - self.kinematics.mounts_in_body
             )
-            feet = anchors + rolling_in_body
+            feet = self.near_axis_in_range(anchors + rolling_in_body, stance)
             angles = self.kinematics.inverse_in_body(feet)
             pitch = angles[:, 1] + angles[:, 2]
         self.rolling_in_world = pose.vectors_to_world(inclined_to_level(rolling_in_body, incline))
