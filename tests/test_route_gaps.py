@@ -102,48 +102,58 @@ def test_a_wide_trench_with_a_way_round_is_gone_round():
 
 def test_the_edge_of_what_was_seen_is_no_gap():
     """Ground seen up to a line and nothing beyond (the view's edge, or a block's shadow
-    with ground beyond it): the unseen cells stay passable."""
+    with ground beyond it), ground the scorer finds no foothold on at the robot's level,
+    and a long unseen stretch between a rim and a drop far off (beyond the top of a flight
+    of stairs): no gap, the unseen cells stay passable."""
     update = _trench(0.0)
     heights = update.heights.copy()
     heights[100:, :] = np.nan
     heights[60:70, 40:60] = np.nan
+    heights[148:, :] = -0.5  # a drop seen at the window's far end, 1 m past the rim
     known = np.isfinite(heights)
-    unseen = MapUpdate(**{**update.__dict__, "heights": heights, "known": known, "valid": known})
+    valid = known & (heights > -0.1)
+    valid[20:45, 20:45] = False  # half a metre of noisy ground
+    valid[97:100, :] = False  # the rim before the unseen stretch
+    unseen = MapUpdate(**{**update.__dict__, "heights": heights, "known": known, "valid": valid})
     grid = cost_grid(unseen, TraversabilityConfig(), SPAN, max_gap_m=STEP)
-    assert not grid.gap.any() and not grid.lethal.any()
+    assert not grid.gap[:148].any()
+    assert not grid.lethal[:120].any()
 
 
-def _shadowed_by_hand(known: np.ndarray, usable: np.ndarray) -> np.ndarray:
+def _shadowed_by_hand(known, usable, deep, max_run):
     out = np.zeros_like(known)
-    for grid_known, grid_usable, flip in ((known, usable, False), (known.T, usable.T, True)):
-        rows, cols = grid_known.shape
+    for flip in (False, True):
+        k, u, d = (a.T if flip else a for a in (known, usable, deep))
+        rows, cols = k.shape
         for i in range(rows):
             for j in range(cols):
-                if grid_known[i, j]:
+                if k[i, j]:
                     continue
-                left = [c for c in range(j) if grid_known[i, c]]
-                right = [c for c in range(j + 1, cols) if grid_known[i, c]]
-                if left and right and not grid_usable[i, left[-1]] and not grid_usable[i, right[0]]:
-                    if flip:
-                        out[j, i] = True
-                    else:
-                        out[i, j] = True
+                left = [c for c in range(j) if k[i, c]]
+                right = [c for c in range(j + 1, cols) if k[i, c]]
+                if not (left and right) or right[0] - left[-1] - 1 > max_run:
+                    continue
+                ends = (left[-1], right[0])
+                if not any(u[i, c] for c in ends) and any(d[i, c] for c in ends):
+                    out[(j, i) if flip else (i, j)] = True
     return out
 
 
 @given(
     seed=st.integers(0, 2**32 - 1),
     shape=st.tuples(st.integers(1, 12), st.integers(1, 12)),
-    known_share=st.floats(0.0, 1.0),
-    usable_share=st.floats(0.0, 1.0),
+    shares=st.tuples(st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0)),
+    max_run=st.integers(0, 12),
 )
 @settings(max_examples=200, deadline=None)
-def test_hidden_cells_between_unusable_ones_are_found_as_a_scan_finds_them(
-    seed, shape, known_share, usable_share
-):
-    """An unseen cell is taken as no foothold exactly when, along its row or its column,
-    the nearest seen cells on both sides are no foothold: the same as scanning each line."""
+def test_hidden_trench_cells_are_found_as_a_scan_finds_them(seed, shape, shares, max_run):
+    """An unseen cell is taken as inside a trench exactly when, along its row or its
+    column, it lies in an unseen run of at most ``max_run`` cells whose nearest seen cells
+    on both sides are no foothold and one of them deep: the same as scanning each line."""
     rng = np.random.default_rng(seed)
-    known = rng.random(shape) < known_share
-    usable = known & (rng.random(shape) < usable_share)
-    assert np.array_equal(_shadowed(known, usable), _shadowed_by_hand(known, usable))
+    known = rng.random(shape) < shares[0]
+    usable = known & (rng.random(shape) < shares[1])
+    deep = known & ~usable & (rng.random(shape) < shares[2])
+    assert np.array_equal(
+        _shadowed(known, usable, deep, max_run), _shadowed_by_hand(known, usable, deep, max_run)
+    )

@@ -16,12 +16,13 @@ as a whole may stand, legs spread around it. For a body centred on a cell it che
   it, not far below the ground near it (a pit floor deeper than ``max_rise_m`` is out of
   reach). The share of known cells in the ring the feet sweep (between half the span and
   the span) without such a cell costs, and above ``max_unsupported`` is lethal.
-- **Gaps.** A foot crosses ground without footholds (a trench, a pit deeper than
-  ``max_rise_m``) in one swing, so no farther than the longest step (``max_gap_m``: the
-  stride plus the foothold search's reach forward). A body centre more than half that
-  from every usable cell, over seen ground, lies in a gap too wide to step: lethal, so a
+- **Gaps.** A foot crosses a trench or a pit deeper than ``max_rise_m`` in one swing, so
+  no farther than the longest step (``max_gap_m``: the stride plus the foothold search's
+  reach forward). A body centre over such a drop (seen, or hidden between its seen sides)
+  more than half that from every usable cell lies in a gap too wide to step: lethal, so a
   trench wider than a step closes the way (no route) instead of freezing the walk at its
-  edge, and a wide pit is gone round.
+  edge, and a wide pit is gone round. Ground at the robot's level that the scorer finds
+  no foothold on (noise, far away) is no gap.
 - **Unknown.** Cells not yet seen are passable but cost ``unknown_cost`` more per metre
   (times their share of the span), so routes prefer what has been seen and are replanned
   as more is.
@@ -216,28 +217,35 @@ def _box_mean(
     return ndimage.uniform_filter(a, size=2 * half_cells + 1, mode="constant", cval=outside)
 
 
-def _shadowed(known: npt.NDArray[np.bool_], usable: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
-    """Unseen cells that lie, along a row or a column, between two seen cells without footholds.
+def _shadowed(
+    known: npt.NDArray[np.bool_],
+    usable: npt.NDArray[np.bool_],
+    deep: npt.NDArray[np.bool_],
+    max_run: int,
+) -> npt.NDArray[np.bool_]:
+    """Unseen cells that lie, along a row or a column, inside a trench seen at both ends.
 
-    The floor of a deep trench is hidden from a camera looking across it, while its rims
-    and far wall are seen: what lies between them has no foothold either. An unseen run
-    with ground a foot can stand on at either end (the shadow behind a block, the edge of
-    what has been seen) may be anything and is left unknown.
+    The floor of a deep trench is hidden from a camera looking across it, while its near
+    rim and something of its far side are seen: an unseen run of at most ``max_run`` cells
+    whose nearest seen cells on both sides have no foothold, one of them deep, has none
+    either. A longer run, or one with ground a foot can stand on at an end (the shadow
+    behind a block, the edge of what has been seen), may be anything and stays unknown.
     """
     out = np.zeros_like(known)
     for axis in (0, 1):
         k = np.moveaxis(known, axis, -1)
-        u = np.moveaxis(usable, axis, -1)
         n = k.shape[-1]
         index = np.broadcast_to(np.arange(n), k.shape)
         before = np.maximum.accumulate(np.where(k, index, -1), axis=-1)
         after = np.minimum.accumulate(np.where(k, index, n)[..., ::-1], axis=-1)[..., ::-1]
-        bounded = (before >= 0) & (after < n)
+        bounded = (before >= 0) & (after < n) & (after - before - 1 <= max_run)
         rows = np.arange(k.shape[0])[:, None]
-        blocked_before = ~u[rows, np.clip(before, 0, n - 1)]
-        blocked_after = ~u[rows, np.clip(after, 0, n - 1)]
-        shadow = ~k & bounded & blocked_before & blocked_after
-        np.moveaxis(out, axis, -1)[...] |= shadow
+        ends = (np.clip(before, 0, n - 1), np.clip(after, 0, n - 1))
+        u = np.moveaxis(usable, axis, -1)
+        d = np.moveaxis(deep, axis, -1)
+        no_foothold = ~u[rows, ends[0]] & ~u[rows, ends[1]]
+        one_deep = d[rows, ends[0]] | d[rows, ends[1]]
+        np.moveaxis(out, axis, -1)[...] |= ~k & bounded & no_foothold & one_deep
     return out
 
 
@@ -318,7 +326,9 @@ def cost_grid(
     gap = np.zeros_like(known)
     if math.isfinite(widest) and usable.any():
         to_foothold_m = ndimage.distance_transform_edt(~usable) * res
-        gap = (known | _shadowed(known, usable)) & (to_foothold_m > 0.5 * widest)
+        deep = known & (heights < ground - config.max_rise_m)
+        hidden = _shadowed(known, usable, deep, cells(2.0 * widest))
+        gap = (deep | hidden) & (to_foothold_m > 0.5 * widest)
         lethal |= gap
     unknown_share = np.clip(_box_mean((~known).astype(np.float64), span_cells, 1.0), 0.0, 1.0)
 
