@@ -120,6 +120,21 @@ def test_the_edge_of_what_was_seen_is_no_gap():
     assert not grid.lethal[:120].any()
 
 
+def test_a_deep_pit_the_feet_step_round_is_no_gap():
+    """A square pit 0.45 m a side, 30 cm deep, wider than a step but shorter than the legs'
+    span: the feet step aside round it, so it is no gap; a trench of the same width
+    running 1 m is one."""
+    xs = ORIGIN[0] + (np.arange(N) + 0.5) * RES
+    x, y = np.meshgrid(xs, xs, indexing="ij")
+    for half_length, is_gap in ((0.225, False), (0.5, True)):
+        inside = (np.abs(x - 0.5) < 0.225) & (np.abs(y - 0.3) < half_length)
+        heights = np.where(inside, -0.3, 0.0)
+        update = _trench(0.0)
+        pit = MapUpdate(**{**update.__dict__, "heights": heights, "valid": ~inside})
+        grid = cost_grid(pit, TraversabilityConfig(), SPAN, max_gap_m=STEP)
+        assert grid.gap.any() == is_gap
+
+
 def _shadowed_by_hand(known, usable, deep, max_run):
     out = np.zeros_like(known)
     for flip in (False, True):

@@ -21,8 +21,10 @@ as a whole may stand, legs spread around it. For a body centred on a cell it che
   reach forward). A body centre over such a drop (seen, or hidden between its seen sides)
   more than half that from every usable cell lies in a gap too wide to step: lethal, so a
   trench wider than a step closes the way (no route) instead of freezing the walk at its
-  edge, and a wide pit is gone round. Ground at the robot's level that the scorer finds
-  no foothold on (noise, far away) is no gap.
+  edge. Only such a stretch at least as long as the legs' span counts: round a shorter
+  one (a pit, the crossing between four stepping stones) the feet step aside within their
+  search, which the foothold planner does. Ground at the robot's level that the scorer
+  finds no foothold on (noise, far away) is no gap.
 - **Unknown.** Cells not yet seen are passable but cost ``unknown_cost`` more per metre
   (times their share of the span), so routes prefer what has been seen and are replanned
   as more is.
@@ -249,6 +251,17 @@ def _shadowed(
     return out
 
 
+def _long_parts(mask: npt.NDArray[np.bool_], min_cells: int) -> npt.NDArray[np.bool_]:
+    """The 8-connected parts of ``mask`` that reach at least ``min_cells`` along x or y."""
+    labels, count = ndimage.label(mask, structure=_SQUARE)
+    if count == 0:
+        return mask
+    keep = np.zeros(count + 1, dtype=bool)
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        keep[k] = max(box[0].stop - box[0].start, box[1].stop - box[1].start) >= min_cells
+    return keep[labels]
+
+
 def wall_faces(update: MapUpdate, config: TraversabilityConfig) -> npt.NDArray[np.bool_]:
     """Cells more than ``max_rise_m`` above a known cell within ``wall_run_m``: wall tops."""
     heights = np.asarray(update.heights, dtype=np.float64)
@@ -328,7 +341,7 @@ def cost_grid(
         to_foothold_m = ndimage.distance_transform_edt(~usable) * res
         deep = known & (heights < ground - config.max_rise_m)
         hidden = _shadowed(known, usable, deep, cells(2.0 * widest))
-        gap = (deep | hidden) & (to_foothold_m > 0.5 * widest)
+        gap = _long_parts((deep | hidden) & (to_foothold_m > 0.5 * widest), 2 * span_cells)
         lethal |= gap
     unknown_share = np.clip(_box_mean((~known).astype(np.float64), span_cells, 1.0), 0.0, 1.0)
 
