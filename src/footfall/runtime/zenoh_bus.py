@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import ipaddress
 import json
-import queue
 import time
 from collections import defaultdict
 from dataclasses import dataclass, field
@@ -39,6 +38,7 @@ from footfall.messages.codec import Message, decode
 from footfall.messages.wire import LinkAck, WholeMapRequest
 from footfall.runtime.bus import Callback, Handler, ServiceError, TopicStats
 from footfall.runtime.link import BULK, COMMAND_TOPICS, PRIORITIES, LinkReceiver, LinkSender
+from footfall.runtime.wake_queue import WakeQueue
 
 KEY_PREFIX = "footfall"
 
@@ -154,7 +154,7 @@ class ZenohBus:
         self.stats: dict[str, TopicStats] = defaultdict(TopicStats)
         self.received: dict[str, TopicStats] = defaultdict(TopicStats)
         self._counts = _Counts()
-        self._inbox: queue.SimpleQueue = queue.SimpleQueue()
+        self._inbox: WakeQueue[tuple] = WakeQueue()
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._subscribers: dict[str, list[Callback]] = defaultdict(list)
         self._zenoh_subscribers: dict[str, zenoh.Subscriber] = {}
@@ -257,17 +257,11 @@ class ZenohBus:
             How many messages and requests were handled.
         """
         handled = 0
-        try:
-            item = self._inbox.get(timeout=timeout) if timeout > 0 else self._inbox.get_nowait()
-        except queue.Empty:
-            item = None
+        item = self._inbox.get(timeout)
         while item is not None:
             self._handle(item)
             handled += 1
-            try:
-                item = self._inbox.get_nowait()
-            except queue.Empty:
-                item = None
+            item = self._inbox.get_nowait()
         self.link_receiver.acknowledge()
         if self.link_sender is not None:
             self.link_sender.flush()
@@ -348,6 +342,7 @@ class ZenohBus:
         if self.command_session is not None:
             self.command_session.close()
         self.session.close()
+        self._inbox.close()
 
     def __enter__(self) -> ZenohBus:
         return self
