@@ -140,7 +140,7 @@ class CostGrid:
         cost: Cost per metre, at least 1; ``inf`` where lethal.
         lethal: Cells the body centre must not enter.
         wall: Wall-top cells (see the module docstring).
-        gap: Seen cells inside a gap wider than a step (see the module docstring).
+        gap: Cells inside a gap wider than a step, seen or hidden (see the module docstring).
         wall_top: Their tops [m], NaN elsewhere.
         flat: Cells seen flat: no wall, and no face ever within them.
         unknown_share: Share of the span around each cell not yet seen.
@@ -337,9 +337,10 @@ def cost_grid(
     ring_unsupported = np.clip(ring_unsupported, 0.0, 1.0)
     lethal |= ring_unsupported > config.max_unsupported
     gap = np.zeros_like(known)
-    if math.isfinite(widest) and usable.any():
+    deep = known & (heights < ground - config.max_rise_m)
+    # A gap is a drop: without a deep cell (most maps) there is none to look for.
+    if math.isfinite(widest) and usable.any() and deep.any():
         to_foothold_m = ndimage.distance_transform_edt(~usable) * res
-        deep = known & (heights < ground - config.max_rise_m)
         hidden = _shadowed(known, usable, deep, cells(2.0 * widest))
         gap = _long_parts((deep | hidden) & (to_foothold_m > 0.5 * widest), 2 * span_cells)
         lethal |= gap
