@@ -1,10 +1,13 @@
-"""Depth odometry on real sequences: footfall's against small_gicp used as its examples do.
+"""Depth odometry: footfall's against small_gicp used as its examples do, and OpenCV's.
 
-For each TUM-layout sequence given (default: the shared freiburg1_xyz frames and the Redwood
-living room, converted), the camera is tracked by
+For each TUM-layout sequence given (default: the shared freiburg1_xyz frames, the Redwood
+living room, converted, and ``--synthetic`` long sequences rendered in this run by
+``rgbd_scenes.py``: a hand-held Kinect in a cluttered room, where drift shows), the camera
+is tracked by
 
-- ``footfall``: :class:`footfall.odometry.registration.DepthOdometry` (coarse and fine
-  Gaussian voxel maps, constant-velocity prediction, refusal of bad frames);
+- ``footfall``: :class:`footfall.odometry.registration.DepthOdometry` (a fine Gaussian
+  voxel map, a coarse one for the frames the fine one misses, constant-velocity prediction,
+  refusal of bad frames);
 - ``small_gicp f2f``: small_gicp's GICP of each frame against the one before it (the
   library's frame-to-frame example), on the same thinned points;
 - ``small_gicp f2m``: small_gicp's VGICP against one incremental voxel map of the past
@@ -15,16 +18,17 @@ living room, converted), the camera is tracked by
 
 all in this run, one thread each (small_gicp's; OpenCV's limited by ``cv.setNumThreads``),
 the point-based ones on the same back-projected points (every second pixel).
-Reported per method: ATE RMSE after SE(3) alignment [mm] and CPU ms per frame. Run with
-``uv run python benchmarks/bench_odometry.py [SEQUENCE FX FY CX CY ...]``; it prints the
-table and writes ``benchmarks/results/odometry.json``.
+Reported per method: ATE RMSE after SE(3) alignment [mm] and CPU ms per frame, or "lost"
+where footfall's odometry gave up (it says so rather than write a wrong path). Run with
+``uv run python benchmarks/bench_odometry.py [SEQUENCE FX FY CX CY ...] [--synthetic SEEDS]
+[--frames N]``; it prints the table and writes ``benchmarks/results/odometry.json``.
 """
 
 from __future__ import annotations
 
+import argparse
 import importlib.util
 import json
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -34,7 +38,7 @@ import small_gicp
 
 from footfall.datasets.tum import TUM_DEPTH_SCALE, load_depth_png, stamped_depth_images
 from footfall.odometry.evaluation import trajectory_errors
-from footfall.odometry.registration import DepthOdometry, OdometryConfig
+from footfall.odometry.registration import DepthOdometry, OdometryConfig, TrackingLostError
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
 from footfall.sensing.trajectory import Trajectory
@@ -134,7 +138,11 @@ def measure(sequence: Path, intrinsics: tuple[float, ...]) -> dict[str, dict[str
         methods["opencv depth"] = lambda: track_opencv(frames, camera)
     out = {}
     for name, track in methods.items():
-        rows, cpu = track()
+        try:
+            rows, cpu = track()
+        except TrackingLostError as lost:
+            out[name] = {"lost": str(lost), "frames": len(frames)}
+            continue
         errors = trajectory_errors(np.array(rows), truth)
         out[name] = {
             "ate_mm": 1000.0 * errors.ate_rmse_m,
@@ -145,30 +153,50 @@ def measure(sequence: Path, intrinsics: tuple[float, ...]) -> dict[str, dict[str
     return out
 
 
-def sequences(args: list[str], scratch: Path) -> list[tuple[str, Path, tuple[float, ...]]]:
-    """The sequences asked for, or the shared ones."""
-    if args:
-        return [
-            (Path(args[k]).name, Path(args[k]), tuple(float(v) for v in args[k + 1 : k + 5]))
-            for k in range(0, len(args), 5)
+def sequences(args: argparse.Namespace, scratch: Path) -> list[tuple[str, Path, tuple]]:
+    """The sequences asked for, or the shared ones; then the synthetic ones."""
+    given = args.sequences
+    if given:
+        chosen = [
+            (Path(given[k]).name, Path(given[k]), tuple(float(v) for v in given[k + 1 : k + 5]))
+            for k in range(0, len(given), 5)
         ]
-    from footfall.datasets.redwood import convert_redwood
+    else:
+        from footfall.datasets.redwood import convert_redwood
 
-    redwood = scratch / "redwood"
-    convert_redwood(SHARED / "redwood_livingroom", redwood)
-    return [
-        ("tum_fr1_xyz", SHARED / "tum_fr1_xyz", (517.3, 516.5, 318.6, 255.3)),
-        ("redwood_livingroom", redwood, (525.0, 525.0, 319.5, 239.5)),
-    ]
+        redwood = scratch / "redwood"
+        convert_redwood(SHARED / "redwood_livingroom", redwood)
+        chosen = [
+            ("tum_fr1_xyz", SHARED / "tum_fr1_xyz", (517.3, 516.5, 318.6, 255.3)),
+            ("redwood_livingroom", redwood, (525.0, 525.0, 319.5, 239.5)),
+        ]
+    if args.synthetic:
+        from rgbd_scenes import INTRINSICS, write_sequence
+
+        for seed in (int(v) for v in args.synthetic.split(",")):
+            folder = scratch / f"room_{seed}"
+            write_sequence(folder, seed, args.frames)
+            chosen.append((f"synthetic room {seed}", folder, INTRINSICS))
+    return chosen
 
 
 def main() -> None:
     """Measure and write the results."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("sequences", nargs="*", help="SEQUENCE FX FY CX CY, repeated")
+    parser.add_argument("--synthetic", default="", help="seeds of rendered rooms, e.g. 0,1,2")
+    parser.add_argument("--frames", type=int, default=900, help="frames per rendered room")
+    args = parser.parse_args()
+    if len(args.sequences) % 5:
+        parser.error("each sequence is given as SEQUENCE FX FY CX CY")
     results = {}
     with tempfile.TemporaryDirectory() as scratch:
-        for name, folder, intrinsics in sequences(sys.argv[1:], Path(scratch)):
+        for name, folder, intrinsics in sequences(args, Path(scratch)):
             results[name] = measure(folder, intrinsics)
             for method, r in results[name].items():
+                if "lost" in r:
+                    print(f"{name:20s} {method:16s} lost: {r['lost']}")
+                    continue
                 print(
                     f"{name:20s} {method:16s} ATE {r['ate_mm']:6.1f} mm  "
                     f"{r['cpu_ms_per_frame']:6.1f} ms/frame  ({r['frames']} frames, "

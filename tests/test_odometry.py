@@ -59,19 +59,24 @@ def test_depth_odometry_follows_a_camera_through_a_room():
     assert position_m < 0.01 and angle_deg < 0.5
 
 
+def _within(norm: float) -> st.SearchStrategy[np.ndarray]:
+    """Vectors of any direction and a length up to ``norm``."""
+    unit = st.tuples(*[st.floats(-1.0, 1.0)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1)
+    return st.builds(
+        lambda v, share: norm * share * np.asarray(v) / np.linalg.norm(v),
+        unit,
+        st.floats(0.0, 1.0),
+    )
+
+
 @settings(max_examples=12, deadline=None)
-@given(
-    st.tuples(*[st.floats(-0.05, 0.05)] * 3),
-    st.tuples(*[st.floats(-0.05, 0.05)] * 3),
-)
+@given(_within(0.05), _within(0.05))
 def test_one_registered_step_recovers_the_cameras_motion(shift_m, turn_rad):
-    """Any motion up to 5 cm and 0.05 rad about each axis between two exact frames (a fast
-    hand-held camera at 30 Hz: 1.5 m/s, 90 deg/s), far walls in view, is found to a
+    """Any motion up to 5 cm and 0.05 rad between two exact frames, from a standing start
+    (a fast hand-held camera at 30 Hz: 1.5 m/s, 86 deg/s), far walls in view, is found to a
     millimetre and a tenth of a degree."""
     start = looking([0.5, 0.2, 1.1], 0.5, 0.35)
-    moved = Pose(
-        start.position + np.asarray(shift_m), Rotation.from_rotvec(turn_rad) * start.rotation
-    )
+    moved = Pose(start.position + shift_m, Rotation.from_rotvec(turn_rad) * start.rotation)
     odometry = DepthOdometry(CAMERA, start=start)
     odometry.track(render(start), 0.0)
     step = odometry.track(render(moved), 0.1)

@@ -52,9 +52,11 @@ class OdometryConfig:
             square of the range) [m].
         downsampling_m: Voxel grid a frame's points are thinned on [m].
         map_voxel_m: Voxel size of the Gaussian map frames register against [m].
-        coarse_voxel_m: A second, coarser map, registered against first: a VGICP point
-            finds its match in the voxel it falls in, so the coarse map catches motions the
-            fine one would miss (fast turns with far walls in view) [m].
+        coarse_voxel_m: A second, coarser map, registered against when the fine one misses:
+            a VGICP point finds its match in the voxel it falls in, so the coarse map catches
+            motions the fine one would miss (fast turns with far walls in view) [m].
+        fallback_share: The coarse map is tried when a frame matches fewer of its points
+            than this share of the recent frames' matched share.
         neighbours: Points each point's covariance is estimated from.
         max_correspondence_m: Farthest a point and its map voxel may lie apart to match [m].
         max_iterations: Optimiser iterations per frame.
@@ -71,9 +73,10 @@ class OdometryConfig:
     stride_px: int = 2
     min_range_m: float = 0.2
     max_range_m: float = 5.0
-    downsampling_m: float = 0.02
-    map_voxel_m: float = 0.08
+    downsampling_m: float = 0.03
+    map_voxel_m: float = 0.04
     coarse_voxel_m: float = 0.3
+    fallback_share: float = 0.85
     neighbours: int = 10
     max_correspondence_m: float = 0.1
     max_iterations: int = 30
@@ -81,7 +84,7 @@ class OdometryConfig:
     min_inlier_share: float = 0.4
     max_step_m: float = 0.25
     max_turn_deg: float = 30.0
-    map_horizon_frames: int = 100
+    map_horizon_frames: int = 1000
     recover_frames: int = 10
     threads: int = 1
 
@@ -180,6 +183,7 @@ class DepthOdometry:
         self._velocity = np.eye(4)  # motion over one frame, in the camera's frame
         self._last_stamp: float | None = None
         self._skipped = 0
+        self._recent_share = 1.0  # inlier share of the registered frames, smoothed
         self.frames = 0
         self.registered = 0
 
@@ -218,35 +222,62 @@ class DepthOdometry:
             return self._skip(stamp, n, f"{n} points after thinning, fewer than {c.min_points}")
         # Constant velocity over the frames skipped since the last registered one.
         predicted = self._last @ np.linalg.matrix_power(self._velocity, self._skipped + 1)
-        coarse = gicp.align(
-            self._coarse, cloud, predicted,
-            max_correspondence_distance=c.coarse_voxel_m,
-            num_threads=c.threads, max_iterations=c.max_iterations,
-        )  # fmt: skip
-        result = gicp.align(
-            self._map, cloud, coarse.T_target_source,
-            max_correspondence_distance=c.max_correspondence_m,
-            num_threads=c.threads, max_iterations=c.max_iterations,
-        )  # fmt: skip
-        pose = np.asarray(result.T_target_source, dtype=np.float64)
-        share = result.num_inliers / n
-        step_m, turn_deg = motion_between(predicted, pose)
-        reason = ""
-        if not result.converged:
-            reason = f"registration did not converge in {c.max_iterations} iterations"
-        elif share < c.min_inlier_share:
-            reason = (
-                f"{share:.0%} of its points matched the map, fewer than {c.min_inlier_share:.0%}"
-            )
-        elif step_m > c.max_step_m or turn_deg > c.max_turn_deg:
-            reason = f"registered {step_m:.3f} m and {turn_deg:.1f} deg from the predicted pose"
+        pose, share, reason = self._register(self._map, cloud, predicted, c.max_correspondence_m)
+        if reason or share < c.fallback_share * self._recent_share:
+            # The fine map missed or matched fewer points than frames have lately (a fast
+            # turn with far walls in view): try it again from the coarse map's answer, and
+            # keep that only where it matches more. Not on every frame: on a view of little
+            # but a floor and a wall the coarse map's wide basins slide where the fine one
+            # holds.
+            coarse, _, _ = self._register(self._coarse, cloud, predicted, c.coarse_voxel_m)
+            again = self._register(self._map, cloud, coarse, c.max_correspondence_m)
+            if not again[2]:
+                again = (again[0], again[1], self._refused(predicted, again[0]))
+            if not again[2] and (reason or again[1] > share):
+                pose, share, reason = again
         if reason:
             return self._skip(stamp, n, reason, share)
+        self._recent_share += 0.2 * (share - self._recent_share)
         frames = self._skipped + 1
         motion = np.linalg.inv(self._last) @ pose
         self._velocity = motion if frames == 1 else _fraction(motion, 1.0 / frames)
         self._join(cloud, pose, stamp)
         return OdometryStep(stamp, self.camera_in_world, True, share, n)
+
+    def _register(
+        self, voxels: Any, cloud: Any, guess: npt.NDArray[np.float64], reach_m: float
+    ) -> tuple[npt.NDArray[np.float64], float, str]:
+        """Register the frame against a map from ``guess``.
+
+        Returns:
+            The pose, the share of the frame's points matched, and why the pose is refused
+            ("" when it is not).
+        """
+        c = self.config
+        result = self._gicp.align(
+            voxels, cloud, guess,
+            max_correspondence_distance=reach_m,
+            num_threads=c.threads, max_iterations=c.max_iterations,
+        )  # fmt: skip
+        pose = np.asarray(result.T_target_source, dtype=np.float64)
+        share = result.num_inliers / int(cloud.size())
+        if not result.converged:
+            return pose, share, f"registration did not converge in {c.max_iterations} iterations"
+        if share < c.min_inlier_share:
+            return (
+                pose,
+                share,
+                (f"{share:.0%} of its points matched the map, fewer than {c.min_inlier_share:.0%}"),
+            )
+        return pose, share, self._refused(guess, pose)
+
+    def _refused(self, predicted: npt.NDArray[np.float64], pose: npt.NDArray[np.float64]) -> str:
+        """Why a registered pose is too far from the prediction to be believed, or ""."""
+        c = self.config
+        step_m, turn_deg = motion_between(predicted, pose)
+        if step_m > c.max_step_m or turn_deg > c.max_turn_deg:
+            return f"registered {step_m:.3f} m and {turn_deg:.1f} deg from the predicted pose"
+        return ""
 
     def _join(self, cloud: Any, pose: npt.NDArray[np.float64], stamp: float) -> None:
         """Add a registered frame to the map."""
