@@ -15,6 +15,13 @@ is tracked by
 - ``opencv depth``: OpenCV's depth odometry (``cv.Odometry``, ICP on the depth image
   pyramid, frame to frame, its defaults), on the whole depth image, where
   ``opencv-contrib-python-headless`` is installed (the dev group has it);
+- ``kiss-icp``: KISS-ICP (Vizzo et al., RA-L 2023) on every pixel's point, where
+  ``kiss-icp`` is installed (not a footfall dependency: ``pip install kiss-icp``); its
+  LiDAR defaults scaled to a room: ranges as footfall's, no deskewing, the adaptive
+  threshold starting at 0.1 m and adapting after 1 cm of motion;
+- ``open3d rgbd``: Open3D's RGB-D odometry (Steinbruecker et al. and Park et al.'s hybrid
+  term, colour and depth, frame to frame), where ``open3d`` is installed and the sequence
+  has colour (``rgb.txt``);
 
 all in this run, one thread each (small_gicp's; OpenCV's limited by ``cv.setNumThreads``),
 the point-based ones on the same back-projected points (every second pixel).
@@ -125,6 +132,77 @@ def track_opencv(frames: list, camera: PinholeCamera) -> tuple[list, list[float]
     return rows, cpu
 
 
+def track_kiss_icp(frames: list, camera: PinholeCamera) -> tuple[list, list[float]]:
+    """KISS-ICP on every pixel's point, its defaults scaled to a room."""
+    from kiss_icp.config import KISSConfig
+    from kiss_icp.kiss_icp import KissICP
+
+    c = CONFIG
+    config = KISSConfig()
+    config.data.min_range, config.data.max_range = c.min_range_m, c.max_range_m
+    config.data.deskew = False
+    config.mapping.voxel_size = c.max_range_m / 100.0  # its own rule, as load_config has it
+    config.adaptive_threshold.initial_threshold = 0.1
+    config.adaptive_threshold.min_motion_th = 0.01
+    config.registration.max_num_threads = 1
+    odometry = KissICP(config)
+    rows, cpu = [], []
+    for stamp, depth in frames:
+        start = time.process_time()
+        points, _ = camera.depth_to_points(depth, TUM_DEPTH_SCALE, 1)
+        odometry.register_frame(points, np.zeros(len(points)))
+        cpu.append(1000.0 * (time.process_time() - start))
+        rows.append(row(stamp, odometry.last_pose))
+    return rows, cpu
+
+
+def colour_of(sequence: Path, frames: list) -> list[Path] | None:
+    """Each depth frame's colour image (the nearest in time, within 20 ms), or None."""
+    if not (sequence / "rgb.txt").is_file():
+        return None
+    rows = [line.split() for line in (sequence / "rgb.txt").read_text().splitlines()]
+    stamped = sorted((float(r[0]), sequence / r[1]) for r in rows if r and r[0][0] != "#")
+    times = np.array([t for t, _ in stamped])
+    chosen = []
+    for stamp, _ in frames:
+        k = int(np.argmin(np.abs(times - stamp)))
+        if abs(times[k] - stamp) > 0.02:
+            return None
+        chosen.append(stamped[k][1])
+    return chosen
+
+
+def track_open3d(frames: list, camera: PinholeCamera, colour: list[Path]) -> tuple[list, list]:
+    """Open3D's RGB-D odometry (hybrid colour and depth term), frame to frame."""
+    import open3d as o3d
+
+    intrinsic = o3d.camera.PinholeCameraIntrinsic(
+        camera.width, camera.height, camera.fx, camera.fy, camera.cx, camera.cy
+    )
+    option = o3d.pipelines.odometry.OdometryOption()
+    option.depth_max = CONFIG.max_range_m
+    jacobian = o3d.pipelines.odometry.RGBDOdometryJacobianFromHybridTerm()
+    pose, rows, cpu, previous = np.eye(4), [], [], None
+    for (stamp, depth), image in zip(frames, colour, strict=True):
+        start = time.process_time()
+        rgbd = o3d.geometry.RGBDImage.create_from_color_and_depth(
+            o3d.io.read_image(str(image)),
+            o3d.geometry.Image(depth.astype(np.uint16)),
+            depth_scale=1.0 / TUM_DEPTH_SCALE,
+            depth_trunc=CONFIG.max_range_m,
+        )
+        if previous is not None:
+            found, motion, _ = o3d.pipelines.odometry.compute_rgbd_odometry(
+                rgbd, previous, intrinsic, np.eye(4), jacobian, option
+            )
+            if found:  # motion takes this frame's points into the previous frame's
+                pose = pose @ motion
+        previous = rgbd
+        cpu.append(1000.0 * (time.process_time() - start))
+        rows.append(row(stamp, pose))
+    return rows, cpu
+
+
 def measure(sequence: Path, intrinsics: tuple[float, ...]) -> dict[str, dict[str, float]]:
     """Every method on one sequence: ATE [mm] and CPU ms per frame."""
     frames, camera = frames_of(sequence, intrinsics)
@@ -136,6 +214,11 @@ def measure(sequence: Path, intrinsics: tuple[float, ...]) -> dict[str, dict[str
     }
     if importlib.util.find_spec("cv2") is not None:
         methods["opencv depth"] = lambda: track_opencv(frames, camera)
+    if importlib.util.find_spec("kiss_icp") is not None:
+        methods["kiss-icp"] = lambda: track_kiss_icp(frames, camera)
+    colour = colour_of(sequence, frames)
+    if importlib.util.find_spec("open3d") is not None and colour is not None:
+        methods["open3d rgbd"] = lambda: track_open3d(frames, camera, colour)
     out = {}
     for name, track in methods.items():
         try:

@@ -99,3 +99,46 @@ def test_intrinsic_matrix_round_trip():
     skewed[0, 1] = 0.5
     with pytest.raises(ConfigError, match="fx, 0, cx"):
         PinholeCamera.from_matrix(skewed, 640, 480)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(1, 4),
+    st.booleans(),
+    st.integers(0, 2**32 - 1),
+    st.floats(0.0, 0.5),
+)
+def test_the_reused_buffers_back_project_exactly_as_depth_to_points(stride, integer, seed, bad):
+    """Frame after frame, with holes, NaN, infinities, negatives and readings out of range,
+    in units or in metres, the buffered back-projection gives depth_to_points' points to
+    the bit."""
+    from footfall.sensing.back_projection import BackProjection
+
+    camera = PinholeCamera(80.0, 75.0, 31.5, 23.7, 64, 48, min_range=0.3, max_range=4.0)
+    projection = BackProjection(camera, stride)
+    rng = np.random.default_rng(seed)
+    for _ in range(3):
+        metres = rng.uniform(-0.5, 6.0, (48, 64))
+        holes = rng.random((48, 64)) < bad
+        if integer:
+            depth = np.where(holes, 0, np.clip(metres, 0, None) * 5000).astype(np.uint16)
+            scale = 1.0 / 5000.0
+        else:
+            depth = np.where(holes, rng.choice([0.0, np.nan, np.inf, -1.0]), metres)
+            scale = None
+        expected, _ = camera.depth_to_points(depth, scale, stride)
+        assert np.array_equal(projection.points(depth, scale), expected)
+
+
+def test_the_reused_buffers_refuse_what_depth_to_points_refuses():
+    """A wrong shape, integer depth without a scale and a stride below 1 are refused."""
+    from footfall.sensing.back_projection import BackProjection
+
+    camera = PinholeCamera(80.0, 75.0, 31.5, 23.7, 64, 48)
+    projection = BackProjection(camera, 2)
+    with pytest.raises(DepthImageError, match="shape"):
+        projection.points(np.ones((48, 63)))
+    with pytest.raises(DepthImageError, match="depth_scale"):
+        projection.points(np.ones((48, 64), dtype=np.uint16))
+    with pytest.raises(DepthImageError, match="stride"):
+        BackProjection(camera, 0)

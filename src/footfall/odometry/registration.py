@@ -23,6 +23,7 @@ import numpy.typing as npt
 
 from footfall.checks import require_positive
 from footfall.errors import ConfigError, FootfallError
+from footfall.sensing.back_projection import BackProjection
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
 
@@ -176,6 +177,7 @@ class DepthOdometry:
             camera.fx, camera.fy, camera.cx, camera.cy, camera.width, camera.height,
             min_range=c.min_range_m, max_range=c.max_range_m,
         )  # fmt: skip
+        self._projection = BackProjection(self.camera, c.stride_px)
         self._start = (start or Pose.identity()).matrix
         self._map: Any = None
         self._coarse: Any = None
@@ -208,10 +210,8 @@ class DepthOdometry:
         """
         c, gicp = self.config, self._gicp
         self.frames += 1
-        points, _ = self.camera.depth_to_points(depth, depth_scale, c.stride_px)
-        cloud, _ = gicp.preprocess_points(
-            points.astype(np.float64), c.downsampling_m, c.neighbours, c.threads
-        )
+        points = self._projection.points(depth, depth_scale)
+        cloud, _ = gicp.preprocess_points(points, c.downsampling_m, c.neighbours, c.threads)
         n = int(cloud.size())
         if self._map is None:
             if n < c.min_points:
