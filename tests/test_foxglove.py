@@ -64,6 +64,8 @@ def test_a_foxglove_client_subscribes_to_the_live_map_and_decodes_the_robots_gri
                 frame = ws.recv(timeout=10.0)
                 if isinstance(frame, str):
                     message = json.loads(frame)
+                    if message["op"] == "status" and message["level"] == 2:
+                        pytest.fail(f"the server answered with an error: {message['message']}")
                     if message["op"] == "advertise":
                         channels.update({c["topic"]: c for c in message["channels"]})
                     if not subscribed and "/map/elevation" in channels:
