@@ -16,6 +16,7 @@ from scipy.spatial.transform import Rotation
 from conftest import shared_data
 from depth_scenes import CAMERA, looking, render
 from footfall.cli import main
+from footfall.errors import ConfigError
 from footfall.odometry.evaluation import trajectory_errors
 from footfall.odometry.registration import DepthOdometry, OdometryConfig, TrackingLostError
 from footfall.sensing.pose import Pose
@@ -254,3 +255,19 @@ def test_a_recording_replays_by_its_own_odometry(tmp_path):
     assert odometry["pose_source"] == "odometry" and odometry["frames"] == 14
     spread = odometry["floor_height_spread_m"] - truth["floor_height_spread_m"]
     assert abs(spread) < 0.005, (odometry, truth)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("fallback_share", 1.5),
+        ("fallback_share", -0.1),
+        ("min_inlier_share", 0.0),
+        ("downsampling_m", 0.0),
+        ("max_range_m", 0.1),
+    ],
+)
+def test_settings_out_of_range_are_refused_by_name(field, value):
+    """A setting outside its range is refused, and the message names it."""
+    with pytest.raises(ConfigError, match=field.split("_")[0]):
+        OdometryConfig(**{field: value})

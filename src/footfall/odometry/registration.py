@@ -110,6 +110,8 @@ class OdometryConfig:
             raise ConfigError("min_points, map_horizon_frames and recover_frames must be >= 1")
         if not 0.0 < self.min_inlier_share <= 1.0:
             raise ConfigError(f"min_inlier_share must be in (0, 1], got {self.min_inlier_share}")
+        if not 0.0 <= self.fallback_share <= 1.0:
+            raise ConfigError(f"fallback_share must be in [0, 1], got {self.fallback_share}")
 
 
 @dataclass(frozen=True)
