@@ -27,6 +27,11 @@ from footfall.sensing.back_projection import BackProjection
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
 
+# Two registrations are told apart by the share of the frame's points within FIT_REACH
+# thinning voxels of the last frame's points; one must fit more by FIT_MARGIN to be taken.
+FIT_REACH = 1.0
+FIT_MARGIN = 0.02
+
 
 class TrackingLostError(FootfallError):
     """Depth odometry could not register a run of frames and cannot say where the camera is.
@@ -213,12 +218,12 @@ class DepthOdometry:
         c, gicp = self.config, self._gicp
         self.frames += 1
         points = self._projection.points(depth, depth_scale)
-        cloud, _ = gicp.preprocess_points(points, c.downsampling_m, c.neighbours, c.threads)
+        cloud, tree = gicp.preprocess_points(points, c.downsampling_m, c.neighbours, c.threads)
         n = int(cloud.size())
         if self._map is None:
             if n < c.min_points:
                 return self._skip(stamp, n, f"{n} points after thinning, fewer than {c.min_points}")
-            self._join(cloud, self._last, stamp)
+            self._join(cloud, tree, self._last, stamp)
             return OdometryStep(stamp, self.camera_in_world, True, 1.0, n)
         if n < c.min_points:
             return self._skip(stamp, n, f"{n} points after thinning, fewer than {c.min_points}")
@@ -235,7 +240,7 @@ class DepthOdometry:
             again = self._register(self._map, cloud, coarse, c.max_correspondence_m)
             if not again[2]:
                 again = (again[0], again[1], self._refused(predicted, again[0]))
-            if not again[2] and (reason or again[1] > share):
+            if not again[2] and (reason or self._fits_better(cloud, again[0], pose)):
                 pose, share, reason = again
         if reason:
             return self._skip(stamp, n, reason, share)
@@ -243,8 +248,34 @@ class DepthOdometry:
         frames = self._skipped + 1
         motion = np.linalg.inv(self._last) @ pose
         self._velocity = motion if frames == 1 else _fraction(motion, 1.0 / frames)
-        self._join(cloud, pose, stamp)
+        self._join(cloud, tree, pose, stamp)
         return OdometryStep(stamp, self.camera_in_world, True, share, n)
+
+    def _fits_better(
+        self, cloud: Any, candidate: npt.NDArray[np.float64], pose: npt.NDArray[np.float64]
+    ) -> bool:
+        """Whether the frame fits the last frame better at ``candidate`` than at ``pose``.
+
+        Better: more of its points within ``FIT_REACH`` thinning voxels of the last
+        registered frame's points, by more than ``FIT_MARGIN``. The voxel map's matched
+        share cannot judge two answers: a point matches the voxel it falls in, wherever in
+        it, and a 4 cm map matches fewer points at the true pose than at one slid along the
+        walls (a camera raised 5 cm: 58 % against 61 %). Points on the last frame's points
+        can: at a pose slid along a surface the points still lie on it, at one off the floor
+        by 5 cm the floor's do not. Two poses that fit alike (one slid along a floor and a
+        wall, where nothing in view tells them apart) keep ``pose``, the one found from the
+        prediction.
+        """
+        tree, last = self._last_frame
+        reach = (FIT_REACH * self.config.downsampling_m) ** 2
+        points = np.asarray(cloud.points(), dtype=np.float64)[:, :3]
+        fits = []
+        for guess in (candidate, pose):
+            into_last = np.linalg.inv(last) @ guess
+            moved = points @ into_last[:3, :3].T + into_last[:3, 3]
+            _, squared = tree.batch_nearest_neighbor_search(moved, num_threads=self.config.threads)
+            fits.append(float(np.mean(np.asarray(squared) <= reach)))
+        return fits[0] > fits[1] + FIT_MARGIN
 
     def _register(
         self, voxels: Any, cloud: Any, guess: npt.NDArray[np.float64], reach_m: float
@@ -281,8 +312,9 @@ class DepthOdometry:
             return f"registered {step_m:.3f} m and {turn_deg:.1f} deg from the predicted pose"
         return ""
 
-    def _join(self, cloud: Any, pose: npt.NDArray[np.float64], stamp: float) -> None:
-        """Add a registered frame to the map."""
+    def _join(self, cloud: Any, tree: Any, pose: npt.NDArray[np.float64], stamp: float) -> None:
+        """Add a registered frame to the map; keep it (and its search tree) as the last."""
+        self._last_frame = (tree, pose)
         c = self.config
         if self._map is None:
             self._map = self._gicp.GaussianVoxelMap(c.map_voxel_m)
