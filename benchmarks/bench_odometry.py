@@ -48,7 +48,7 @@ from footfall.odometry.evaluation import trajectory_errors
 from footfall.odometry.registration import DepthOdometry, OdometryConfig, TrackingLostError
 from footfall.sensing.camera import PinholeCamera
 from footfall.sensing.pose import Pose
-from footfall.sensing.trajectory import Trajectory
+from footfall.sensing.trajectory import Trajectory, read_table
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "rgbd"
 CONFIG = OdometryConfig()
@@ -160,8 +160,7 @@ def colour_of(sequence: Path, frames: list) -> list[Path] | None:
     """Each depth frame's colour image (the nearest in time, within 20 ms), or None."""
     if not (sequence / "rgb.txt").is_file():
         return None
-    rows = [line.split() for line in (sequence / "rgb.txt").read_text().splitlines()]
-    stamped = sorted((float(r[0]), sequence / r[1]) for r in rows if r and r[0][0] != "#")
+    stamped = sorted((float(r[0]), sequence / r[1]) for r in read_table(sequence / "rgb.txt", 2))
     times = np.array([t for t, _ in stamped])
     chosen = []
     for stamp, _ in frames:

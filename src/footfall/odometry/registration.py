@@ -188,6 +188,7 @@ class DepthOdometry:
         self._start = (start or Pose.identity()).matrix
         self._map: Any = None
         self._coarse: Any = None
+        self._last_frame: tuple[Any, npt.NDArray[np.float64]] | None = None  # tree, pose
         self._last = self._start.copy()  # the last registered pose, 4x4
         self._velocity = np.eye(4)  # motion over one frame, in the camera's frame
         self._last_stamp: float | None = None
@@ -266,6 +267,7 @@ class DepthOdometry:
         wall, where nothing in view tells them apart) keep ``pose``, the one found from the
         prediction.
         """
+        assert self._last_frame is not None  # a map exists: a frame has joined it
         tree, last = self._last_frame
         reach = (FIT_REACH * self.config.downsampling_m) ** 2
         points = np.asarray(cloud.points(), dtype=np.float64)[:, :3]
