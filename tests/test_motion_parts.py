@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
@@ -383,6 +383,7 @@ def test_solver_targets_are_reachable_and_an_unreachable_stance_foot_raises(defa
     distance=st.floats(0.0005, 0.03),
     bearing_deg=st.floats(-180.0, 180.0),
 )
+@example(leg=0, distance=0.0005, bearing_deg=60.0)
 def test_a_supporting_foot_under_its_hip_is_turned_into_the_coxa_range(
     default_spec, leg, distance, bearing_deg
 ):
@@ -424,7 +425,10 @@ def test_a_supporting_foot_under_its_hip_is_turned_into_the_coxa_range(
     assert low - 1e-9 <= angles[leg, 0] <= high + 1e-9
     others = np.arange(6) != leg
     np.testing.assert_allclose(out[others], asked[others], atol=1e-12)
-    if not beyond:
+    # A bearing on the range's limit itself may come back from the body frame a rounding
+    # error beyond it, and is then turned inside like any foot beyond the range.
+    on_limit = min(abs(bearing - low), abs(bearing - high)) < 1e-9
+    if not beyond and not on_limit:
         np.testing.assert_allclose(out[leg], asked[leg], atol=1e-12)
 
 
