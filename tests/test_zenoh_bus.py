@@ -276,3 +276,18 @@ def test_a_sigint_landing_on_a_network_thread_stops_the_loop():
             signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     assert signal.getsignal(signal.SIGINT) is before
     assert signal.set_wakeup_fd(-1) == -1  # no wakeup socket left behind
+
+
+def test_the_session_leaves_room_for_bursts_of_small_messages(tmp_path):
+    """Commands, the mode, status and logs get more of zenoh's transmit batches than its
+    default two: a burst published while the transmit thread waits for a core is queued,
+    not dropped after zenoh's 1 ms wait. A user's own zenoh configuration file is kept
+    as written."""
+    ours = ZenohConfig().zenoh_config()
+    for priority in ("real_time", "interactive_high", "interactive_low"):
+        assert int(ours.get_json(f"transport/link/tx/queue/size/{priority}")) >= 8
+    assert int(ours.get_json("transport/link/tx/queue/size/data_low")) == 2  # bulk: as zenoh's
+    own = tmp_path / "zenoh.json5"
+    own.write_text("{ transport: { link: { tx: { queue: { size: { real_time: 3 } } } } } }")
+    theirs = ZenohConfig(config_file=own).zenoh_config()
+    assert int(theirs.get_json("transport/link/tx/queue/size/real_time")) == 3

@@ -41,6 +41,10 @@ from footfall.runtime.link import BULK, COMMAND_TOPICS, PRIORITIES, LinkReceiver
 from footfall.runtime.wake_queue import WakeQueue
 
 KEY_PREFIX = "footfall"
+# Batches zenoh's transmit queue holds for the small, latency-bound priorities (its
+# default is 2 for every priority, at most 16); the bulk ones keep theirs, so no more
+# image data waits in front of the link than before.
+TX_QUEUE_BATCHES = {"real_time": 16, "interactive_high": 8, "interactive_low": 8}
 
 
 def endpoint_host(endpoint: str) -> str:
@@ -126,6 +130,13 @@ class ZenohConfig:
         config.insert_json5("connect/endpoints", json.dumps(list(self.connect)))
         config.insert_json5("scouting/multicast/enabled", json.dumps(self.scouting))
         config.insert_json5("adminspace/enabled", "true")  # for listening_locators()
+        if self.config_file is None:
+            # Room for bursts while the transmit thread waits for a core: with zenoh's two
+            # batches per priority, a publisher that finds both taken waits 1 ms and then
+            # drops (congestion control DROP), and on a busy machine three of five
+            # commands sent back to back were lost that way.
+            for priority, batches in TX_QUEUE_BATCHES.items():
+                config.insert_json5(f"transport/link/tx/queue/size/{priority}", str(batches))
         return config
 
 
