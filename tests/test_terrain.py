@@ -7,6 +7,8 @@ import math
 import mujoco
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from footfall.errors import ConfigError
 from footfall.robot.spec import load_spec
@@ -114,6 +116,30 @@ def test_true_scores_see_what_a_perfect_camera_would():
     x0 = wide.start_x + 5 * wide.stone
     profile = [truth.valid_at((x0 + 0.01 + 0.02 * k, -0.64 + 4.5 * wide.stone)) for k in range(8)]
     assert profile == profile[::-1] and sum(profile) > 0
+
+
+@settings(max_examples=8, deadline=None)
+@given(
+    offset=st.tuples(st.integers(0, 199), st.integers(0, 199)),
+    seed=st.integers(0, 50),
+)
+def test_true_scores_find_a_cells_highest_point_up_to_its_sides(offset, seed):
+    """Against a brute-force truth sampled 17 times per cell and axis: stepping stones'
+    edges wherever they fall in the cells (a stone reaching a millimetre into a cell puts
+    its top there, as a camera's points would) give the same valid cells."""
+    from footfall.scoring.walkability import ScoreConfig
+    from footfall.sim.terrain_relief import SteppingStones
+    from footfall.sim.truth import TrueScores
+
+    class Dense(TrueScores):
+        SAMPLES = (*np.linspace(0.0, 1.0, 17)[:-1], 1.0 - 1e-4)
+
+    stones = SteppingStones(gap=0.08, seed=seed)
+    x0, y0 = 0.9 + 0.02 * offset[0] / 200, -0.3 + 0.02 * offset[1] / 200
+    extent = (x0, x0 + 0.6, y0, y0 + 0.6)
+    truth = TrueScores(stones, 0.02, ScoreConfig(), extent)
+    dense = Dense(stones, 0.02, ScoreConfig(), extent)
+    np.testing.assert_array_equal(truth.valid, dense.valid)
 
 
 def test_only_geometry_beyond_every_gait_is_declared_impassable():

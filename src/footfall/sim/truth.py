@@ -18,16 +18,19 @@ from footfall.sim.terrain import Terrain
 class TrueScores:
     """The ground-truth terrain scored on a grid: which cells a foot may really use.
 
-    Each cell takes the highest point of the true terrain inside it (sampled on a
-    ``SUBSAMPLES`` x ``SUBSAMPLES`` grid), and a cell whose samples span more height than
-    the score's ``max_cell_spread`` beyond what its slope explains is invalid: the rules
-    the mapper and the scorer apply to the points that fall in a cell, so this is the score
-    map a perfect camera would give. (Sampling the cell centre only would leave a cell whose
-    centre lies on an edge, as 6 cm grooves between 16 cm stones put every edge, to
-    floating-point rounding.)
+    Each cell takes the highest point of the true terrain inside it, and a cell whose
+    points span more height than the score's ``max_cell_spread`` beyond what its slope
+    explains is invalid: the rules the mapper and the scorer apply to the points that fall
+    in a cell, so this is the score map a perfect camera would give. The terrain is sampled
+    at ``SAMPLES`` fractions of each cell along each axis, its near side included and its
+    far side a hair inside (a cell holds ``[x0, x0 + res)``, as the mapper bins points):
+    an edge that crosses a cell a millimetre from its side puts a sliver of the higher
+    level in that cell, which a camera's points show and samples inside the cell alone
+    would miss. (Sampling the cell centre only would leave a cell whose centre lies on an
+    edge, as 6 cm grooves between 16 cm stones put every edge, to floating-point rounding.)
     """
 
-    SUBSAMPLES = 4
+    SAMPLES = (0.0, 0.25, 0.5, 0.75, 1.0 - 1e-4)
 
     def __init__(
         self, terrain: Terrain, resolution: float, score: ScoreConfig, extent: tuple[float, ...]
@@ -35,8 +38,8 @@ class TrueScores:
         x0, x1, y0, y1 = extent
         self.origin = (x0, y0)
         self.resolution = resolution
-        k = self.SUBSAMPLES
-        inner = (np.arange(k) + 0.5) / k * resolution
+        k = len(self.SAMPLES)
+        inner = np.asarray(self.SAMPLES) * resolution
         xs = x0 + np.arange(round((x1 - x0) / resolution))[:, None] * resolution + inner
         ys = y0 + np.arange(round((y1 - y0) / resolution))[:, None] * resolution + inner
         heights = terrain.height(xs.ravel()[:, None], ys.ravel()[None, :])
@@ -152,19 +155,17 @@ def judge_footholds(
 ) -> FootholdMetrics:
     """A walk's footholds against the terrain's truth.
 
-    The truth is scored at the map's ``resolution`` [m] on a grid that covers where the feet
-    went and the ``goal``. Unjudged when the robot does not know where its feet are.
+    The truth is scored at the map's ``resolution`` [m] on the map's grid, over where the
+    feet went and the ``goal``. Unjudged when the robot does not know where its feet are.
     """
     feet = log.array("feet_in_world")[..., :2].reshape(-1, 2)
     if not np.isfinite(feet).all():
         return FootholdMetrics.unjudged(log)
     low = np.minimum(feet.min(axis=0), goal) - 0.5
     high = np.maximum(feet.max(axis=0), goal) + 0.5
-    extent = (
-        min(-1.0, float(low[0])),
-        max(float(goal[0]) + 1.0, float(high[0])),
-        min(-1.5, float(low[1])),
-        max(1.5, float(high[1])),
-    )
+    # On the map's grid: global cells [k res, (k + 1) res), as the mapper bins points.
+    low = np.floor(np.minimum(low, (-1.0, -1.5)) / resolution) * resolution
+    high = np.ceil(np.maximum(high, (float(goal[0]) + 1.0, 1.5)) / resolution) * resolution
+    extent = (float(low[0]), float(high[0]), float(low[1]), float(high[1]))
     truth = TrueScores(terrain, resolution, score, extent)
     return foothold_metrics(log, terrain, truth, foot_radius)
