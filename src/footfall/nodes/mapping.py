@@ -26,7 +26,8 @@ from footfall.mapping.snapshot import MapSnapshot
 from footfall.messages import DepthFrame, GroundPrior, LogLine, MapUpdate, PoseEstimate
 from footfall.nodes.pose_guard import ALTERNATIVE_POSE_TOPIC, REGISTERED_POSE_TOPIC
 from footfall.runtime.bus import Bus
-from footfall.scoring.walkability import ScoreConfig, ScoreMap, score_map
+from footfall.scoring.incremental import IncrementalScorer
+from footfall.scoring.walkability import ScoreConfig, ScoreMap
 
 # A pose estimate this close in time to a depth frame is the frame's pose [s].
 POSE_TOLERANCE_S = 0.02
@@ -139,6 +140,7 @@ class MappingNode:
         self.bus = bus
         self.reject_repeats = reject_repeats
         self.score_config = score_config or ScoreConfig()
+        self._scorer = IncrementalScorer(self.score_config)
         self.height_map: MapEngine = open_map(map_config, centre=centre)
         self.initial_centre = (float(centre[0]), float(centre[1]))
         self.publish_every_frame = publish_every_frame
@@ -329,7 +331,9 @@ class MappingNode:
 
     def _score(self, stamp: float) -> MapUpdate:
         snapshot = self.height_map.snapshot()
-        self.scores = score_map(snapshot, self.score_config)
+        if self._scorer.config != self.score_config:
+            self._scorer = IncrementalScorer(self.score_config)
+        self.scores = self._scorer.score(snapshot)
         self.sequence += 1
         return map_update(stamp, self.sequence, snapshot, self.scores)
 
