@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from footfall.mapping.snapshot import MapSnapshot
-from footfall.scoring.reference import score_grid_numpy
+from footfall.scoring.reference import score_grid_numpy, shadow_rims_numpy, shadowed_cells_numpy
 from footfall.scoring.walkability import (
     ScoreConfig,
     edge_cells,
@@ -20,6 +20,34 @@ from footfall.scoring.walkability import (
 from footfall.sim.terrain import Course
 
 CONFIG = ScoreConfig()
+
+
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 30),
+    st.integers(1, 30),
+    st.floats(0.0, 1.0),
+    st.floats(0.0, 1.0),
+    st.integers(1, 4),
+)
+@settings(max_examples=80, deadline=None)
+def test_compiled_shadow_rules_match_numpy_reference(seed, rows, cols, unseen, hit, rim_cells):
+    """The compiled shadow and shadow-rim rules equal their whole-array definitions on maps
+    of random seen cells, parts hit and point counts, the window's borders included."""
+    rng = np.random.default_rng(seed)
+    known = rng.uniform(size=(rows, cols)) >= unseen
+    parts = (rng.uniform(size=(rows, cols, 16)) < hit) @ (1 << np.arange(16))
+    parts = np.where(known, parts, 0).astype(np.uint16)
+    points = np.where(known, rng.integers(0, 100, (rows, cols)), 0)
+    config = ScoreConfig(shadow_points=int(rng.integers(1, 80)), shadow_rim_cells=rim_cells)
+    np.testing.assert_array_equal(
+        shadowed_cells(parts, points, config),
+        shadowed_cells_numpy(parts, points, config.shadow_points),
+    )
+    np.testing.assert_array_equal(
+        shadow_rims(parts, points, known, config),
+        shadow_rims_numpy(parts, points, known, config.shadow_points, rim_cells),
+    )
 
 
 @given(st.integers(0, 2**32 - 1), st.integers(8, 40), st.integers(8, 40), st.floats(0.0, 0.3))

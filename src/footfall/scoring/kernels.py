@@ -1,4 +1,4 @@
-"""Compiled score-map kernel (numba): separable passes with contiguous inner loops.
+"""Compiled score-map kernels (numba): separable passes with contiguous inner loops.
 
 Equivalent to :mod:`footfall.scoring.reference` (plain NumPy), which the tests compare
 it with. Indices outside the grid are clamped for the filters; such cells are invalid
@@ -108,3 +108,82 @@ def score_grid(
                 slope[i, j] = np.nan
                 proximity[i, j] = np.nan
                 score[i, j] = np.nan
+
+
+@njit(cache=True, nogil=True)
+def _never_hit(missing, sub, axis, last):
+    """Parts along one side of a cell never hit, of the bits of those never hit.
+
+    The side is ``a = 0`` or ``a = sub - 1`` for ``axis`` 0 (along x), ``b = 0`` or
+    ``b = sub - 1`` for ``axis`` 1, ``last`` choosing the second.
+    """
+    count = 0
+    fixed = sub - 1 if last else 0
+    for p in range(sub):
+        bit = sub * fixed + p if axis == 0 else sub * p + fixed
+        count += (missing >> bit) & 1
+    return count
+
+
+@njit(cache=True, nogil=True)
+def shadowed_cells(bits, points, shadow_points, sub, out):
+    """Fill ``out`` with the cells partly in a shadow, and the neighbours across their sides.
+
+    As :func:`footfall.scoring.walkability.shadowed_cells` defines them.
+    """
+    rows, cols = bits.shape
+    full = (1 << (sub * sub)) - 1
+    half = (sub + 1) // 2
+    out[:, :] = False
+    for i in range(rows):
+        for j in range(cols):
+            b = np.int64(bits[i, j]) & full
+            if points[i, j] < shadow_points or b == full:
+                continue
+            out[i, j] = True
+            missing = full & ~b
+            if i > 0 and _never_hit(missing, sub, 0, False) >= half:
+                out[i - 1, j] = True
+            if i < rows - 1 and _never_hit(missing, sub, 0, True) >= half:
+                out[i + 1, j] = True
+            if j > 0 and _never_hit(missing, sub, 1, False) >= half:
+                out[i, j - 1] = True
+            if j < cols - 1 and _never_hit(missing, sub, 1, True) >= half:
+                out[i, j + 1] = True
+
+
+@njit(cache=True, nogil=True)
+def shadow_rims(bits, points, seen, shadow_points, rim_cells, sub, out):
+    """Fill ``out`` with the slivers of a rim before a shadow.
+
+    As :func:`footfall.scoring.walkability.shadow_rims` defines them: beyond the grid
+    counts as unknown for the shadow and as not well seen behind.
+    """
+    rows, cols = bits.shape
+    full = (1 << (sub * sub)) - 1
+    half = (sub + 1) // 2
+    out[:, :] = False
+    for i in range(rows):
+        for j in range(cols):
+            if not seen[i, j]:
+                continue
+            missing = full & ~(np.int64(bits[i, j]) & full)
+            for side in range(4):
+                axis = side // 2
+                step = 1 if side % 2 else -1  # side 0: -x, 1: +x, 2: -y, 3: +y
+                if _never_hit(missing, sub, axis, step == 1) < half:
+                    continue
+                dark = True
+                for d in range(1, rim_cells + 1):
+                    ii = i + step * d if axis == 0 else i
+                    jj = j + step * d if axis == 1 else j
+                    if 0 <= ii < rows and 0 <= jj < cols and seen[ii, jj]:
+                        dark = False
+                        break
+                if not dark:
+                    continue
+                ii = i - step if axis == 0 else i
+                jj = j - step if axis == 1 else j
+                if 0 <= ii < rows and 0 <= jj < cols and points[ii, jj] >= shadow_points:
+                    out[i, j] = True
+                    break

@@ -209,35 +209,12 @@ def shadowed_cells(
         points: Points each cell has caught.
         config: Score parameters (``shadow_points``).
     """
-    bits = np.asarray(parts, dtype=np.uint16)
-    full = (1 << (SUB * SUB)) - 1
-    shadow = (np.asarray(points) >= config.shadow_points) & (bits != full)
-    if not shadow.any():
-        return shadow
-    missing = np.where(shadow, ~bits & full, 0)
-    part = np.arange(SUB)
-
-    def open_side(bit_numbers: npt.NDArray[np.int64]) -> npt.NDArray[np.bool_]:
-        never_hit = sum(((missing >> int(b)) & 1) for b in bit_numbers)
-        return never_hit >= (SUB + 1) // 2
-
-    out = shadow.copy()
-    out[:-1, :] |= open_side(part)[1:, :]  # parts a = 0: the low-x side
-    out[1:, :] |= open_side(SUB * (SUB - 1) + part)[:-1, :]
-    out[:, :-1] |= open_side(SUB * part)[:, 1:]  # parts b = 0: the low-y side
-    out[:, 1:] |= open_side(SUB * part + SUB - 1)[:, :-1]
+    bits = np.ascontiguousarray(parts, dtype=np.uint16)
+    out = np.empty(bits.shape, dtype=bool)
+    kernels.shadowed_cells(
+        bits, np.ascontiguousarray(points, dtype=np.int64), config.shadow_points, SUB, out
+    )
     return out
-
-
-def _side_bits(side: str) -> npt.NDArray[np.int64]:
-    """Bit numbers of the parts along one side of a cell: ``"-x"``, ``"+x"``, ``"-y"``, ``"+y"``."""
-    part = np.arange(SUB)
-    return {
-        "-x": part,
-        "+x": SUB * (SUB - 1) + part,
-        "-y": SUB * part,
-        "+y": SUB * part + SUB - 1,
-    }[side]
 
 
 def shadow_rims(
@@ -254,43 +231,17 @@ def shadow_rims(
     window counts as unknown). Scored as unknown, it keeps the kernel's band of invalid
     cells where the true edge puts it.
     """
-    bits = np.asarray(parts, dtype=np.uint16)
-    seen = np.asarray(known, dtype=bool)
-    well_seen = np.asarray(points) >= config.shadow_points
-    full = (1 << (SUB * SUB)) - 1
-    missing = np.where(seen, ~bits & full, 0)
-    opposite = {"+x": "-x", "-x": "+x", "+y": "-y", "-y": "+y"}
-
-    def open_side(side: str) -> npt.NDArray[np.bool_]:
-        never_hit = sum(((missing >> int(b)) & 1) for b in _side_bits(side))
-        return seen & (never_hit >= (SUB + 1) // 2)
-
-    out = np.zeros(seen.shape, dtype=bool)
-    for side in opposite:  # open on +x: a shadow beyond along +x, well seen behind; ...
-        shadow = np.logical_and.reduce(
-            [_across(~seen, side, d, True) for d in range(1, config.shadow_rim_cells + 1)]
-        )
-        out |= open_side(side) & shadow & _across(well_seen, opposite[side], 1, False)
-    return out
-
-
-def _across(a: npt.NDArray[np.bool_], side: str, cells: int, beyond: bool) -> npt.NDArray[np.bool_]:
-    """For each cell, the value of ``a`` that many ``cells`` across its ``side``.
-
-    ``side`` is ``+x``, ``-x``, ``+y`` or ``-y``; ``beyond`` where that lies outside the window.
-    """
-    axis = 0 if side[1] == "x" else 1
-    out = np.full(a.shape, beyond)
-    n = a.shape[axis]
-    if cells >= n:
-        return out
-    src = [slice(None), slice(None)]
-    dst = [slice(None), slice(None)]
-    if side[0] == "+":
-        src[axis], dst[axis] = slice(cells, n), slice(0, n - cells)
-    else:
-        src[axis], dst[axis] = slice(0, n - cells), slice(cells, n)
-    out[tuple(dst)] = a[tuple(src)]
+    bits = np.ascontiguousarray(parts, dtype=np.uint16)
+    out = np.empty(bits.shape, dtype=bool)
+    kernels.shadow_rims(
+        bits,
+        np.ascontiguousarray(points, dtype=np.int64),
+        np.ascontiguousarray(known, dtype=bool),
+        config.shadow_points,
+        config.shadow_rim_cells,
+        SUB,
+        out,
+    )
     return out
 
 
