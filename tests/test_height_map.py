@@ -76,6 +76,29 @@ def test_scrolling_keeps_cells_still_in_the_window(seed):
             _fill(m, rng, position)
 
 
+@given(st.integers(0, 2**32 - 1))
+@settings(max_examples=15, deadline=None)
+def test_a_snapshot_holds_each_cells_layers_in_world_order(seed):
+    """Every layer of a snapshot's cell [i, j] is the buffer's at the global cell origin +
+    (i, j); an unknown cell has NaN heights, spread and variance and no parts or points."""
+    rng = np.random.default_rng(seed)
+    m = HeightMap(HeightMapConfig(size=32, resolution=0.05))
+    position = rng.uniform(-3.0, 3.0, 2)
+    m.recentre(tuple(position))
+    _fill(m, rng, position)
+    m.recentre(tuple(position + rng.uniform(-0.6, 0.6, 2)))
+    snapshot = m.snapshot()
+    cells = m.origin + np.stack(np.meshgrid(np.arange(32), np.arange(32), indexing="ij"), -1)
+    b = m.buffer_index(cells)
+    known = m.layers.known[b[..., 0], b[..., 1]]
+    np.testing.assert_array_equal(snapshot.known, known)
+    for name, empty in (("heights", np.nan), ("spread", np.nan), ("variance", np.nan),
+                        ("parts", 0), ("points", 0)):  # fmt: skip
+        layer = getattr(m.layers, name)[b[..., 0], b[..., 1]]
+        np.testing.assert_array_equal(getattr(snapshot, name), np.where(known, layer, empty))
+    assert snapshot.origin == pytest.approx(tuple(m.origin * 0.05))
+
+
 def test_jump_beyond_the_map_clears_it():
     """A pose that jumps farther than the map recentres it empty, without error."""
     m = HeightMap(HeightMapConfig(size=32, resolution=0.1))

@@ -306,20 +306,32 @@ class HeightMap:
     # Views -------------------------------------------------------------------------------
     def snapshot(self) -> MapSnapshot:
         """The window as arrays ordered by world position (cell [0, 0] at the window corner)."""
-        shift = self.window.roll()
         layers = self.layers
-        known = np.roll(layers.known, shift, axis=(0, 1))
-
-        def rolled(layer: npt.NDArray, empty: float) -> npt.NDArray:
-            return np.where(known, np.roll(layer, shift, axis=(0, 1)), empty)
-
+        n = self.config.size
+        out = (
+            np.empty((n, n), dtype=bool),
+            np.empty((n, n), dtype=np.float64),
+            np.empty((n, n), dtype=np.float64),
+            np.empty((n, n), dtype=np.float64),
+            np.empty((n, n), dtype=np.uint16),
+            np.empty((n, n), dtype=np.int64),
+        )
+        wrap_i, wrap_j = (-s for s in self.window.roll())
+        kernels.unroll(
+            wrap_i,
+            wrap_j,
+            (layers.known, layers.heights, layers.spread, layers.variance, layers.parts,
+             layers.points),
+            out,
+        )  # fmt: skip
+        known, heights, spread, variance, parts, points = out
         return MapSnapshot(
-            heights=rolled(layers.heights, np.nan),
+            heights=heights,
             known=known,
             origin=self.window.origin_m,
             resolution=self.config.resolution,
-            spread=rolled(layers.spread, np.nan),
-            variance=rolled(layers.variance, np.nan),
-            parts=rolled(layers.parts, 0).astype(np.uint16),
-            points=rolled(layers.points, 0),
+            spread=spread,
+            variance=variance,
+            parts=parts,
+            points=points,
         )

@@ -357,3 +357,39 @@ def fuse(
                 gain = p_var / (p_var + m_var)
                 heights[i, j] += gain * innovation
                 variance[i, j] = (1.0 - gain) * p_var
+
+
+@njit(cache=True, nogil=True)
+def unroll(wrap_i, wrap_j, layers, out):
+    """The circular buffer's layers in world order, unknown cells emptied.
+
+    ``layers`` and ``out`` are ``(known, heights, spread, variance, parts, points)``; cell
+    ``[i, j]`` of ``out`` is buffer cell ``[(i + wrap_i) mod N, (j + wrap_j) mod N]`` (the
+    window's corner at ``[0, 0]``); an unknown one gets NaN heights, spread and variance
+    and no parts or points.
+    """
+    known, heights, spread, variance, parts, points = layers
+    o_known, o_heights, o_spread, o_variance, o_parts, o_points = out
+    n = known.shape[0]
+    for i in range(n):
+        bi = i + wrap_i
+        if bi >= n:
+            bi -= n
+        for j in range(n):
+            bj = j + wrap_j
+            if bj >= n:
+                bj -= n
+            k = known[bi, bj]
+            o_known[i, j] = k
+            if k:
+                o_heights[i, j] = heights[bi, bj]
+                o_spread[i, j] = spread[bi, bj]
+                o_variance[i, j] = variance[bi, bj]
+                o_parts[i, j] = parts[bi, bj]
+                o_points[i, j] = points[bi, bj]
+            else:
+                o_heights[i, j] = np.nan
+                o_spread[i, j] = np.nan
+                o_variance[i, j] = np.nan
+                o_parts[i, j] = 0
+                o_points[i, j] = 0
