@@ -102,6 +102,34 @@ def test_the_search_finds_the_least_route_cost_to_every_cell(seed, rows, cols, l
         assert flat == 0
 
 
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 30),
+    st.integers(1, 30),
+    st.integers(0, 12),
+    st.floats(0.0, 1.0),
+)
+@settings(max_examples=60, deadline=None)
+def test_the_wall_tops_in_reach_are_the_octagon_the_repeated_filters_grow(
+    seed, rows, cols, radius, empty
+):
+    """The compiled octagon maximum equals ``radius`` alternating 3 x 3 cross and square
+    maximum filters, the grid's sides included."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    a = rng.normal(0.0, 0.1, (rows, cols))
+    a[rng.random((rows, cols)) < empty] = -np.inf
+    square = np.ones((3, 3), dtype=bool)
+    cross = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
+    expected = a
+    for k in range(radius):
+        expected = ndimage.maximum_filter(
+            expected, footprint=square if k % 2 else cross, mode="nearest"
+        )
+    np.testing.assert_array_equal(traversability._disc_max(a, radius), expected)
+
+
 @given(st.integers(0, 2**32 - 1), st.integers(1, 4), st.floats(0.05, 1.0))
 @settings(max_examples=40, deadline=None)
 def test_the_ground_median_is_that_of_the_valid_heights_in_the_window(seed, half_sub, share):

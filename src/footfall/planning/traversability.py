@@ -49,10 +49,11 @@ from scipy import ndimage
 from footfall.checks import require_non_negative, require_positive
 from footfall.errors import ConfigError
 from footfall.messages import MapUpdate
+from footfall.planning import cost_kernels
+from footfall.planning.cost_kernels import octagon_half_widths
 from footfall.robot.spec import HexapodSpec
 
 _SQUARE = np.ones((3, 3), dtype=bool)
-_CROSS = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
 # The ground level's median is taken on every this many cells along each axis.
 MEDIAN_STRIDE = 3
 # Below this share of valid cells in its span a body has no ground to stand on.
@@ -182,10 +183,15 @@ class CostGrid:
 
 
 def _disc_max(a: npt.NDArray[np.float64], radius_cells: int) -> npt.NDArray[np.float64]:
-    """Greatest value within about ``radius_cells`` of each cell (an octagon)."""
-    out = a
-    for k in range(radius_cells):
-        out = ndimage.maximum_filter(out, footprint=_SQUARE if k % 2 else _CROSS, mode="nearest")
+    """Greatest value within about ``radius_cells`` of each cell (an octagon).
+
+    The octagon ``radius_cells`` alternating 3 x 3 cross and square maximum filters grow,
+    in two compiled passes (:mod:`footfall.planning.cost_kernels`).
+    """
+    out = np.empty(a.shape, dtype=np.float64)
+    cost_kernels.octagon_max(
+        np.ascontiguousarray(a, dtype=np.float64), octagon_half_widths(radius_cells), out
+    )
     return out
 
 
