@@ -1,7 +1,8 @@
 """What footfall's own nodes cost an on-board computer, per second walked.
 
 Walks the README's main job (stairs) and an obstacle field with navigation, each in its
-own process, and reads each walk's ``metrics.json``: per node, CPU seconds on its thread
+own process (after a short unmeasured walk of each, so no walk counts the compiling of the
+numba kernels), and reads each walk's ``metrics.json``: per node, CPU seconds on its thread
 per second walked (share of one core) and the median and 95th percentile latency of an
 update; the sum of footfall's own nodes (mapping, navigation, movement, servo, pose guard:
 every name that does not start with ``sim``, the simulator's rendering, physics, true pose,
@@ -72,6 +73,11 @@ def main() -> None:
             )  # fmt: skip
             trees[args.against] = base
         try:
+            # A tree's first walk compiles its numba kernels (cached per source tree) and
+            # would count that as its nodes' CPU: every tree walks once unmeasured first.
+            for tree, source in trees.items():
+                for walk_args in WALKS.values():
+                    walk(source, [*walk_args, "--seconds", "8"], Path(tmp) / "warm-up")
             for name, walk_args in WALKS.items():
                 results[name] = {}
                 for tree, source in trees.items():
