@@ -189,6 +189,36 @@ def test_a_deep_narrow_trench_is_straddled_and_a_wide_pit_is_not(width):
     assert np.hypot(samples[:, 0] - 0.5, samples[:, 1] - 0.5).min() > 0.6
 
 
+@given(st.integers(0, 2**32 - 1), st.integers(1, 25), st.integers(1, 25), st.integers(0, 9))
+@settings(max_examples=60, deadline=None)
+def test_enclosed_unseen_cells_are_those_a_walk_along_rows_and_columns_finds(
+    seed, rows, cols, max_run
+):
+    """Against a walk from each unseen cell to the nearest seen cells either way along its
+    row and its column: enclosed when both are seen without a foothold, one deep, and the
+    run between them is at most ``max_run`` long."""
+    rng = np.random.default_rng(seed)
+    known = rng.random((rows, cols)) < rng.random()
+    usable = known & (rng.random((rows, cols)) < rng.random())
+    deep = known & (rng.random((rows, cols)) < 0.3)
+    got = traversability._shadowed(known, usable, deep, max_run)
+    expected = np.zeros_like(known)
+    for i, j in zip(*np.nonzero(~known), strict=True):
+        for di, dj in ((0, 1), (1, 0)):
+            ends = []
+            for sign in (-1, 1):
+                a, b = i, j
+                while 0 <= a < rows and 0 <= b < cols and not known[a, b]:
+                    a, b = a + sign * di, b + sign * dj
+                ends.append((a, b) if 0 <= a < rows and 0 <= b < cols else None)
+            if None in ends:
+                continue
+            run = max(ends[1][0] - ends[0][0], ends[1][1] - ends[0][1]) - 1
+            bare = not usable[ends[0]] and not usable[ends[1]]
+            expected[i, j] |= run <= max_run and bare and (deep[ends[0]] or deep[ends[1]])
+    np.testing.assert_array_equal(got, expected)
+
+
 def test_unknown_ground_is_passable_but_dearer_than_seen_ground():
     """Unseen cells cost more per metre than seen flat ones, and are never lethal."""
     x, _ = _grid_xy()

@@ -1,11 +1,13 @@
 """Compiled passes of the route cost grid (numba).
 
-The greatest value within an octagon of each cell, as the cost grid takes the tops of
-walls within the legs' span: the octagon of ``r`` alternating 3 x 3 cross and square
-dilations (the shape :func:`scipy.ndimage.maximum_filter` grows when applied ``r`` times
-with those footprints), taken in two separable passes instead of ``r`` whole-grid filters.
-Beyond the grid counts as its nearest cell (``mode="nearest"``), which the ``r`` passes
-and the one octagon agree on.
+- The greatest value within an octagon of each cell, as the cost grid takes the tops of
+  walls within the legs' span: the octagon of ``r`` alternating 3 x 3 cross and square
+  dilations (the shape :func:`scipy.ndimage.maximum_filter` grows when applied ``r``
+  times with those footprints), taken in two separable passes instead of ``r`` whole-grid
+  filters. Beyond the grid counts as its nearest cell (``mode="nearest"``), which the
+  ``r`` passes and the one octagon agree on.
+- The unseen cells enclosed along a row or a column by seen ground without a foothold, one
+  side deep (a trench's floor between its rims), in one scan of each row and column.
 """
 
 from __future__ import annotations
@@ -64,3 +66,43 @@ def octagon_max(a, half_widths, out):
                 v = rows_max[w, ii, j]
                 if v > out[i, j]:
                     out[i, j] = v
+
+
+@njit(cache=True, nogil=True)
+def enclosed_unseen(known, usable, deep, max_run, out):
+    """Fill ``out`` with the unseen cells enclosed along a row or a column.
+
+    An unseen run of at most ``max_run`` cells whose nearest seen cells on both sides are
+    not ``usable``, one of them ``deep``; a run reaching the grid's side is not enclosed.
+    """
+    rows, cols = known.shape
+    out[:, :] = False
+    for axis in range(2):
+        lines = rows if axis == 0 else cols
+        length = cols if axis == 0 else rows
+        for line in range(lines):
+            k = 0
+            while k < length:
+                i, j = (line, k) if axis == 0 else (k, line)
+                if known[i, j]:
+                    k += 1
+                    continue
+                start = k
+                while k < length:
+                    i, j = (line, k) if axis == 0 else (k, line)
+                    if known[i, j]:
+                        break
+                    k += 1
+                if start == 0 or k == length or k - start > max_run:
+                    continue
+                a = (line, start - 1) if axis == 0 else (start - 1, line)
+                b = (line, k) if axis == 0 else (k, line)
+                if usable[a] or usable[b]:
+                    continue
+                if not (deep[a] or deep[b]):
+                    continue
+                for m in range(start, k):
+                    if axis == 0:
+                        out[line, m] = True
+                    else:
+                        out[m, line] = True

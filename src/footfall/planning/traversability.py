@@ -239,21 +239,14 @@ def _shadowed(
     either. A longer run, or one with ground a foot can stand on at an end (the shadow
     behind a block, the edge of what has been seen), may be anything and stays unknown.
     """
-    out = np.zeros_like(known)
-    for axis in (0, 1):
-        k = np.moveaxis(known, axis, -1)
-        n = k.shape[-1]
-        index = np.broadcast_to(np.arange(n), k.shape)
-        before = np.maximum.accumulate(np.where(k, index, -1), axis=-1)
-        after = np.minimum.accumulate(np.where(k, index, n)[..., ::-1], axis=-1)[..., ::-1]
-        bounded = (before >= 0) & (after < n) & (after - before - 1 <= max_run)
-        rows = np.arange(k.shape[0])[:, None]
-        ends = (np.clip(before, 0, n - 1), np.clip(after, 0, n - 1))
-        u = np.moveaxis(usable, axis, -1)
-        d = np.moveaxis(deep, axis, -1)
-        no_foothold = ~u[rows, ends[0]] & ~u[rows, ends[1]]
-        one_deep = d[rows, ends[0]] | d[rows, ends[1]]
-        np.moveaxis(out, axis, -1)[...] |= ~k & bounded & no_foothold & one_deep
+    out = np.empty(known.shape, dtype=bool)
+    cost_kernels.enclosed_unseen(
+        np.ascontiguousarray(known),
+        np.ascontiguousarray(usable),
+        np.ascontiguousarray(deep),
+        max_run,
+        out,
+    )
     return out
 
 
