@@ -33,7 +33,8 @@ as a whole may stand, legs spread around it. For a body centred on a cell it che
 
 The legs' span is taken as a disc: the hexapod may face any way while it walks (it turns
 on the spot), so its footprint is the disc its feet can take at any heading. Everything is
-array filters over the map (SciPy), so a 256 x 256 grid takes milliseconds.
+array filters over the map (SciPy, and compiled passes in
+:mod:`footfall.planning.cost_kernels`), so a 256 x 256 grid takes milliseconds.
 """
 
 from __future__ import annotations

@@ -1,10 +1,11 @@
 """Score only what changed: a rolling map re-scored where a frame or a move touched it.
 
-A depth frame touches the part of the window its camera sees, a few percent of a 256 x 256
-map; scoring the whole window every frame spends most of its time on cells whose inputs did
-not change. Every rule of :func:`~footfall.scoring.walkability.score_map` is local: a cell's
-scores depend only on the map within ``REACH`` cells of it (the shadow rim looks 3 cells
-across, the scorer's window and the edge cells' neighbours add 4), so
+A depth frame touches the part of the window its camera sees (about half of a 256 x 256 map
+with its context, for the main job's camera); scoring the whole window every frame spends
+the rest on cells whose inputs did not change. Every rule of
+:func:`~footfall.scoring.walkability.score_map` is local: a cell's scores depend only on the
+map within ``REACH`` cells of it (the shadow rim looks 3 cells across, the scorer's window
+and the edge cells' neighbours add 4), so
 
 - a cell whose inputs (height, known, spread, variance, parts, points) changed moves the
   scores of the cells within ``REACH`` of it, and those are scored again from the map
@@ -13,8 +14,8 @@ across, the scorer's window and the edge cells' neighbours add 4), so
   the scorer treats what lies beyond as unknown, over other cells: the bands within
   ``REACH`` of both new borders are scored again.
 
-The result is the whole window's score map, equal to scoring the snapshot whole (the tests
-hold the two equal over walks).
+The result is the whole window's score map, equal to scoring the snapshot whole, cell for
+cell (the tests hold the two equal over a walking camera's frames).
 """
 
 from __future__ import annotations
