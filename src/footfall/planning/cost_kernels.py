@@ -31,21 +31,20 @@ def octagon_half_widths(radius_cells: int) -> npt.NDArray[np.int64]:
 
 
 @njit(cache=True, nogil=True)
-def octagon_max(a, half_widths, out):
+def octagon_max(a, half_widths, rows_max, out):
     """Fill ``out`` with the greatest value of ``a`` (no NaN) in each cell's octagon.
 
     ``half_widths[k]`` is the octagon's half-width on the row ``k - R`` cells off along the
-    first axis; indices beyond the grid are clamped to it.
+    first axis; indices beyond the grid are clamped to it. ``rows_max`` is scratch of shape
+    ``(max(half_widths) + 1, *a.shape)``: ``rows_max[w, i, j]`` becomes the greatest of
+    ``a[i, j - w .. j + w]``.
     """
     rows, cols = a.shape
     reach = half_widths.shape[0] // 2
-    widest = 0
-    for w in half_widths:
-        widest = max(widest, w)
-    # rows_max[w, i, j]: the greatest of a[i, j - w .. j + w] (clamped).
-    rows_max = np.empty((widest + 1, rows, cols))
-    rows_max[0] = a
-    for w in range(1, widest + 1):
+    for i in range(rows):
+        for j in range(cols):
+            rows_max[0, i, j] = a[i, j]
+    for w in range(1, rows_max.shape[0]):
         for i in range(rows):
             for j in range(cols):
                 m = rows_max[w - 1, i, j]
@@ -76,7 +75,9 @@ def enclosed_unseen(known, usable, deep, max_run, out):
     not ``usable``, one of them ``deep``; a run reaching the grid's side is not enclosed.
     """
     rows, cols = known.shape
-    out[:, :] = False
+    for i in range(rows):
+        for j in range(cols):
+            out[i, j] = False
     for axis in range(2):
         lines = rows if axis == 0 else cols
         length = cols if axis == 0 else rows

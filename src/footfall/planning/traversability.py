@@ -189,10 +189,10 @@ def _disc_max(a: npt.NDArray[np.float64], radius_cells: int) -> npt.NDArray[np.f
     The octagon ``radius_cells`` alternating 3 x 3 cross and square maximum filters grow,
     in two compiled passes (:mod:`footfall.planning.cost_kernels`).
     """
+    widths = octagon_half_widths(radius_cells)
     out = np.empty(a.shape, dtype=np.float64)
-    cost_kernels.octagon_max(
-        np.ascontiguousarray(a, dtype=np.float64), octagon_half_widths(radius_cells), out
-    )
+    scratch = np.empty((int(widths.max()) + 1, *a.shape))
+    cost_kernels.octagon_max(np.ascontiguousarray(a, dtype=np.float64), widths, scratch, out)
     return out
 
 

@@ -134,7 +134,9 @@ def shadowed_cells(bits, points, shadow_points, sub, out):
     rows, cols = bits.shape
     full = (1 << (sub * sub)) - 1
     half = (sub + 1) // 2
-    out[:, :] = False
+    for i in range(rows):
+        for j in range(cols):
+            out[i, j] = False
     for i in range(rows):
         for j in range(cols):
             b = np.int64(bits[i, j]) & full
@@ -162,7 +164,9 @@ def shadow_rims(bits, points, seen, shadow_points, rim_cells, sub, out):
     rows, cols = bits.shape
     full = (1 << (sub * sub)) - 1
     half = (sub + 1) // 2
-    out[:, :] = False
+    for i in range(rows):
+        for j in range(cols):
+            out[i, j] = False
     for i in range(rows):
         for j in range(cols):
             if not seen[i, j]:
