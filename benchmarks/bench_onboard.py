@@ -75,7 +75,7 @@ def main() -> None:
         try:
             # A tree's first walk compiles its numba kernels (cached per source tree) and
             # would count that as its nodes' CPU: every tree walks once unmeasured first.
-            for tree, source in trees.items():
+            for source in trees.values():
                 for walk_args in WALKS.values():
                     walk(source, [*walk_args, "--seconds", "8"], Path(tmp) / "warm-up")
             for name, walk_args in WALKS.items():
