@@ -36,8 +36,10 @@ def looking(position: npt.ArrayLike, yaw_rad: float, pitch_rad: float) -> Pose:
     return Pose(np.asarray(position, dtype=np.float64), body * optical_in_body)
 
 
-def render(camera_in_world: Pose, camera: PinholeCamera = CAMERA) -> npt.NDArray[np.float64]:
-    """Depth along the optical axis [m], shape (height, width)."""
+def render(
+    camera_in_world: Pose, camera: PinholeCamera = CAMERA, boxes: tuple = BOXES
+) -> npt.NDArray[np.float64]:
+    """Depth along the optical axis [m], shape (height, width), of the room with ``boxes``."""
     u, v = np.meshgrid(np.arange(camera.width), np.arange(camera.height))
     rays = np.stack(
         [(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], axis=-1
@@ -50,7 +52,7 @@ def render(camera_in_world: Pose, camera: PinholeCamera = CAMERA) -> npt.NDArray
         exits = np.where(d > 0, (high - o) * inv, (low - o) * inv)
         exits[~np.isfinite(exits)] = np.inf
         depth = exits.min(axis=1)
-        for lo, hi in BOXES:
+        for lo, hi in boxes:
             t0, t1 = (lo - o) * inv, (hi - o) * inv
             near = np.nanmax(np.minimum(t0, t1), axis=1)
             far = np.nanmin(np.maximum(t0, t1), axis=1)

@@ -46,6 +46,7 @@ import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from footfall.checks import require_positive
+from footfall.estimation.depth_correction import Correction
 from footfall.estimation.rotations import cross, rodrigues, rotation_of, rotation_vectors
 from footfall.robot.kinematics import LegKinematics
 from footfall.sensing.pose import Pose
@@ -262,6 +263,23 @@ class LegInertialEstimator:
         self.rotation_matrix = rotation
         self.position = self.position + step
         self._grow(float(np.linalg.norm(step)), dt)
+
+    def correct(self, correction: Correction) -> None:
+        """Take a registration's correction (position, heading, their variances)."""
+        if not correction.applied:
+            return
+        self.position, self.rotation_matrix = correction.apply(self.position, self.rotation_matrix)
+        # A correction is not distance walked.
+        self._distance_anchor, _ = correction.apply(self._distance_anchor, self.rotation_matrix)
+        self.covariance[[0, 1, 2, 5]] *= 1.0 - correction.gains
+        # The heading's variance grows with the time since it was last known (see _grow):
+        # that time becomes the one at which the model reaches the corrected variance.
+        noise, bias = self.config.heading_noise**2, self.config.residual_bias**2
+        variance = self.covariance[5]
+        if bias > 0.0:
+            self._heading_s = (-noise + math.sqrt(noise**2 + 4.0 * bias * variance)) / (2.0 * bias)
+        elif noise > 0.0:
+            self._heading_s = variance / noise
 
     def _stand(
         self,

@@ -17,10 +17,16 @@ estimate with its velocity and covariance (:class:`~footfall.messages.OdometryEs
 ``pose/odometry``; ``tracking`` False while it calibrates or once lost), as a legged robot's
 state estimator does.
 
+Each depth image also corrects the estimate's drift: it is registered against a map of the
+images before it from the pose the estimate gives it, and the part of the difference that the
+view constrains is fused with the estimate (:mod:`footfall.estimation.depth_correction`);
+the pose published for that image is the corrected one.
+
 Options (``--pose-option KEY=VALUE``): ``noise`` is ``realistic`` (the simulated robot's IMU
 and encoders read as a real robot's, :mod:`footfall.estimation.sensor_noise`; the default on
 a simulated or mocked robot) or ``none`` (the default on hardware, whose sensors have their
-own); ``seed`` seeds that noise (the walk's seed by default).
+own); ``seed`` seeds that noise (the walk's seed by default); ``register`` is ``on`` (the
+default; needs small_gicp, ``footfall[odometry]``) or ``off`` (legs and IMU alone).
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from footfall.errors import ConfigError
+from footfall.estimation.depth_correction import DepthCorrection
 from footfall.estimation.leg_inertial import BodyReading, EstimatorConfig, LegInertialEstimator
 from footfall.estimation.rotations import rotation_of
 from footfall.estimation.sensor_noise import NoisySensors, SensorNoiseConfig
@@ -64,6 +71,8 @@ class EstimatorPose:
         noise: Read the robot's state through this sensor model (a simulated robot).
         config: The estimator's weights.
         topic: Where the estimates go.
+        correction: Registers the depth images to correct the estimate (None: legs and IMU
+            alone).
 
     Attributes:
         estimator: The estimator.
@@ -82,8 +91,10 @@ class EstimatorPose:
         noise: NoisySensors | None = None,
         config: EstimatorConfig | None = None,
         topic: str = PoseEstimate.TOPIC,
+        correction: DepthCorrection | None = None,
     ) -> None:
         self.bus = bus
+        self.correction = correction
         self.topic = topic
         self.noise = noise
         self.estimator = LegInertialEstimator(LegKinematics(spec), start, config)
@@ -108,12 +119,15 @@ class EstimatorPose:
             ConfigError: An unknown option or value, or no robot spec.
         """
         options = dict(setup.options)
-        unknown = sorted(set(options) - {"noise", "seed"})
+        unknown = sorted(set(options) - {"noise", "seed", "register"})
         if unknown:
             raise ConfigError(
                 f"the estimator pose source has no option {', '.join(unknown)}; "
-                "it takes noise, seed"
+                "it takes noise, seed, register"
             )
+        register = options.get("register", "on")
+        if register not in ("on", "off"):
+            raise ConfigError(f"register={register!r}: choose on or off")
         # A robot whose time is computed (a simulator, a mock) reads exactly: noise by default.
         computed = not getattr(setup.backend, "realtime", True)
         noise_name = options.get("noise", "realistic" if computed else "none")
@@ -133,7 +147,8 @@ class EstimatorPose:
             if noise_name == "realistic"
             else None
         )
-        return cls(setup.bus, spec, start, noise)
+        correction = DepthCorrection() if register == "on" else None
+        return cls(setup.bus, spec, start, noise, correction=correction)
 
     def _on_targets(self, targets: EffectorTargets) -> None:
         self._swinging = np.asarray(targets.swinging, dtype=bool)
@@ -194,7 +209,25 @@ class EstimatorPose:
         for entry in self._history:
             if entry[0] <= taken + 1e-9:
                 chosen = entry
-        body = Pose(chosen[1].copy(), rotation_of(chosen[2]))
+        position, rotation = chosen[1].copy(), chosen[2]
+        if self.correction is not None:
+            e = self.estimator
+            camera = Pose(position, rotation_of(rotation)).compose(frame.camera_in_body)
+            correction = self.correction.register(
+                frame.depth,
+                frame.intrinsics,
+                frame.depth_scale,
+                camera.matrix,
+                e.covariance[[0, 1, 2, 5]],
+            )
+            if correction.applied:
+                e.correct(correction)
+                self._history = deque(
+                    ((t, *correction.apply(p, r)) for t, p, r in self._history),
+                    maxlen=HISTORY_TICKS,
+                )
+                position, rotation = correction.apply(position, rotation)
+        body = Pose(position, rotation_of(rotation))
         self.answered += 1
         self.bus.publish(
             self.topic, PoseEstimate(frame.stamp, body.compose(frame.camera_in_body), body)
@@ -205,8 +238,10 @@ class EstimatorPose:
 
         Returns ``estimator_position_drift_m``, ``estimator_heading_drift_deg``,
         ``estimator_distance_m``, ``estimator_height_drift_m`` (the vertical part, signed),
-        ``estimator_position_sigma_m`` (the estimator's own 1-sigma horizontal error) and
-        ``estimator_slipped`` (foot readings left out).
+        ``estimator_position_sigma_m`` (the estimator's own 1-sigma horizontal error),
+        ``estimator_slipped`` (foot readings left out), and ``estimator_corrections`` of
+        ``estimator_correction_frames`` (depth images that corrected the estimate, of those
+        registered).
         """
         e = self.estimator
         error = e.pose.position - true_body_in_world.position
@@ -218,6 +253,8 @@ class EstimatorPose:
             "estimator_height_drift_m": float(error[2]),
             "estimator_position_sigma_m": float(np.sqrt(e.covariance[0] + e.covariance[1])),
             "estimator_slipped": e.slipped,
+            "estimator_corrections": 0 if self.correction is None else self.correction.applied,
+            "estimator_correction_frames": 0 if self.correction is None else self.correction.frames,
         }
 
 
