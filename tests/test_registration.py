@@ -9,6 +9,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from footfall.motion.registration import RegistrationDrift
+from footfall.motion.walker import WalkController
+from footfall.planning.terrain_planner import TerrainPlanner
+from footfall.robot.planar import PlanarPose
+from footfall.robot.spec import load_spec
 
 
 def test_jitter_about_a_fixed_pose_stays_small_and_a_drift_shows_over_the_window():
@@ -68,3 +72,16 @@ def test_the_error_is_the_largest_net_correction_within_the_window(steps, horizo
     start = max(i for i, (ti, _, _) in enumerate(totals) if ti <= t - horizon or i == 0)
     expected = max(math.hypot(x - hx, y - hy) for _, hx, hy in totals[start:])
     assert math.isclose(r.error_m, expected, abs_tol=1e-12)
+
+
+def test_a_correction_that_aligns_the_body_with_the_map_is_not_counted_as_the_map_sliding():
+    """A pose source that registers its images against its map (footfall's estimator) says
+    how far it moved the body to align it: the controller follows the whole correction but
+    counts only the rest as the map sliding under the feet."""
+    spec = load_spec("default")
+    walker = WalkController(spec, planner=TerrainPlanner(spec))
+    walker.correct_pose(PlanarPose(0.0, 0.0, 0.0))  # the first estimate registers the world
+    for k in range(1, 11):
+        walker.correct_pose(PlanarPose(0.003 * k, 0.0, 0.0), aligned_in_world=(0.002, 0.0))
+    assert walker.pose.x == 0.03  # followed whole
+    assert math.isclose(walker.planner.registration_error_m, 0.01, abs_tol=1e-9)

@@ -180,14 +180,20 @@ class PoseEstimate(Message):
         camera_in_world: The depth camera's optical frame in the world (what visual SLAM
             estimates).
         body_in_world: The body frame in the world.
+        aligned_in_world: How far (x, y) the source moved the body since its previous
+            estimate to align it with the map it built (footfall's estimator registering
+            its images) [m]: a correction towards the map, which the controller leaves out
+            of how far the map may have slid under the feet.
     """
 
     TOPIC = "pose"
     RAW_TOPIC = "pose/raw"
+    VERSION = 2  # the alignment with the map
 
     stamp: float
     camera_in_world: Pose
     body_in_world: Pose
+    aligned_in_world: tuple[float, float] = (0.0, 0.0)
 
     @property
     def planar_body(self) -> PlanarPose:

@@ -235,12 +235,17 @@ class WalkController:
         self.safety.resume()
         self.shaper.stop()
 
-    def correct_pose(self, estimate: PlanarPose) -> None:
+    def correct_pose(
+        self, estimate: PlanarPose, aligned_in_world: tuple[float, float] = (0.0, 0.0)
+    ) -> None:
         """Re-register the controller's world on a body pose estimate in the map frame.
 
         The reference pose, the supporting feet and the swing paths move together by the
         planar transform that takes the reference pose onto the estimate, so the legs hold
-        still while footholds planned on the map land where the map says.
+        still while footholds planned on the map land where the map says. The part of the
+        correction that the pose source made to align the body with the map
+        (``aligned_in_world`` [m]) brings the feet's world onto the map rather than away
+        from it, and is not counted in how far the map may have slid.
         """
         c, s = math.cos(estimate.yaw - self.pose.yaw), math.sin(estimate.yaw - self.pose.yaw)
         rotation = np.array([[c, -s], [s, c]])
@@ -249,7 +254,9 @@ class WalkController:
         )
         if self.registration is not None and self.planner is not None:
             self.registration.add(
-                self._time or 0.0, estimate.x - self.pose.x, estimate.y - self.pose.y
+                self._time or 0.0,
+                estimate.x - self.pose.x - aligned_in_world[0],
+                estimate.y - self.pose.y - aligned_in_world[1],
             )
             self.planner.registration_error_m = self.registration.error_m
         feet, self.feet_in_world = self.feet_in_world, self.feet_in_world.copy()

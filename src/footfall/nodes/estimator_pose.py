@@ -210,6 +210,7 @@ class EstimatorPose:
             if entry[0] <= taken + 1e-9:
                 chosen = entry
         position, rotation = chosen[1].copy(), chosen[2]
+        aligned = (0.0, 0.0)
         if self.correction is not None:
             e = self.estimator
             camera = Pose(position, rotation_of(rotation)).compose(frame.camera_in_body)
@@ -226,12 +227,13 @@ class EstimatorPose:
                     ((t, *correction.apply(p, r)) for t, p, r in self._history),
                     maxlen=HISTORY_TICKS,
                 )
+                before = position
                 position, rotation = correction.apply(position, rotation)
+                aligned = (float(position[0] - before[0]), float(position[1] - before[1]))
         body = Pose(position, rotation_of(rotation))
         self.answered += 1
-        self.bus.publish(
-            self.topic, PoseEstimate(frame.stamp, body.compose(frame.camera_in_body), body)
-        )
+        camera = body.compose(frame.camera_in_body)
+        self.bus.publish(self.topic, PoseEstimate(frame.stamp, camera, body, aligned))
 
     def drift(self, true_body_in_world: Pose) -> dict[str, float]:
         """How far the newest estimate is from the truth, and the distance walked.

@@ -129,7 +129,7 @@ class MovementNode:
         self._map_stamp = message.stamp
 
     def _on_pose(self, message: PoseEstimate) -> None:
-        self.controller.correct_pose(message.planar_body)
+        self.controller.correct_pose(message.planar_body, message.aligned_in_world)
         self._pose_stamp = message.stamp
         self.publish_status()
 
