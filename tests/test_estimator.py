@@ -304,12 +304,16 @@ def test_the_simulated_robot_walks_on_its_own_pose(tmp_path):
     assert metrics["estimator_position_drift_m"] < 0.01 * walked, metrics
     assert metrics["estimator_heading_drift_deg"] < 1.0 * walked, metrics
     assert abs(metrics["estimator_distance_m"] - walked) < 0.05 * walked, metrics
+    # Every depth image registered against the map; the floor holds the height.
+    assert metrics["estimator_corrections"] >= 0.9 * metrics["estimator_correction_frames"] > 0
+    assert abs(metrics["estimator_height_drift_m"]) < 0.0015, metrics
 
 
-def test_a_pose_option_the_estimator_does_not_have_is_refused(tmp_path):
+@pytest.mark.parametrize("option", ["colour=blue", "register=maybe"])
+def test_a_pose_option_the_estimator_does_not_have_is_refused(tmp_path, option):
     from footfall.cli import main
 
-    args = ["walk", "--pose", "estimator", "--pose-option", "colour=blue", "--seconds", "1"]
+    args = ["walk", "--pose", "estimator", "--pose-option", option, "--seconds", "1"]
     assert main([*args, "--out", str(tmp_path)]) == 2
 
 

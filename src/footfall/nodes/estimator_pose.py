@@ -147,7 +147,10 @@ class EstimatorPose:
             if noise_name == "realistic"
             else None
         )
-        correction = DepthCorrection() if register == "on" else None
+        try:
+            correction = DepthCorrection() if register == "on" else None
+        except ConfigError as exc:
+            raise ConfigError(f"{exc}; or walk without it: --pose-option register=off") from exc
         return cls(setup.bus, spec, start, noise, correction=correction)
 
     def _on_targets(self, targets: EffectorTargets) -> None:
