@@ -42,7 +42,7 @@ which is what the height map needs.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -229,18 +229,18 @@ class DepthCorrection:
             num_threads=1, max_iterations=c.max_iterations,
         )  # fmt: skip
         share = result.num_inliers / n
-        correction = self._correction(
-            camera_in_world, np.asarray(result.T_target_source), cloud, variances
-        )
-        # Not converging is no reason to refuse: along the directions the view leaves free
-        # the optimiser wanders without end (a floor alone), and those are projected out.
         if share < c.min_inlier_share:
+            self._map.insert(cloud, camera_in_world)
             least = c.min_inlier_share
             reason = f"{share:.0%} of its points matched the map, fewer than {least:.0%}"
-        else:
-            reason = correction.reason
-        if reason:
-            correction = Correction(observed=correction.observed, inlier_share=share, reason=reason)
+            return Correction(inlier_share=share, reason=reason)
+        # Not converging is no reason to refuse: along the directions the view leaves free
+        # the optimiser wanders without end (a floor alone), and those are projected out.
+        correction = replace(
+            self._correction(camera_in_world, np.asarray(result.T_target_source), cloud, variances),
+            inlier_share=share,
+        )
+        if not correction.applied:
             self._map.insert(cloud, camera_in_world)
             return correction
         position, rotation = correction.apply(camera_in_world[:3, 3], camera_in_world[:3, :3])
@@ -248,14 +248,7 @@ class DepthCorrection:
         joined[:3, :3], joined[:3, 3] = rotation, position
         self._map.insert(cloud, joined)
         self.applied += 1
-        return Correction(
-            correction.shift_in_world,
-            correction.yaw_rad,
-            correction.about_in_world,
-            correction.gains,
-            correction.observed,
-            share,
-        )
+        return correction
 
     def _correction(
         self,
