@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -158,11 +159,19 @@ class Correction:
         """Whether the frame corrects the estimate."""
         return not self.reason
 
+    @cached_property
+    def turn(self) -> npt.NDArray[np.float64]:
+        """The turn about the vertical, a rotation matrix.
+
+        Made once: a correction is applied to every pose the estimator keeps.
+        """
+        return rodrigues(self.yaw_rad * UP)
+
     def apply(
         self, position: npt.NDArray[np.float64], rotation: npt.NDArray[np.float64]
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """A pose (position, rotation matrix) in the world, corrected."""
-        turn = rodrigues(self.yaw_rad * UP)
+        turn = self.turn
         moved = self.about_in_world + turn @ (position - self.about_in_world) + self.shift_in_world
         return moved, turn @ rotation
 
