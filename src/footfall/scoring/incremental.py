@@ -116,6 +116,15 @@ class IncrementalScorer:
             boxes += [(0, r + max(-di, 0), 0, m), (n - r - max(di, 0), n, 0, m)]
         if dj:
             boxes += [(0, n, 0, r + max(-dj, 0)), (0, n, m - r - max(dj, 0), m)]
+        # The boxes with their context may cost more than the window (a camera that sees most
+        # of it, moving): then the window is scored whole.
+        work = 0
+        for i0, i1, j0, j1 in boxes:
+            i0, i1, j0, j1 = max(i0, 0), min(i1, n), max(j0, 0), min(j1, m)
+            work += (min(i1 + r, n) - max(i0 - r, 0)) * (min(j1 + r, m) - max(j0 - r, 0))
+        if work >= n * m:
+            self.cells_scored = n * m
+            return score_map(snapshot, self.config)
         out = {
             name: _shifted(getattr(scores, name), di, dj, False if name == "valid" else np.nan)
             if di or dj
