@@ -9,53 +9,86 @@ where the body's estimate no longer is. This module checks the leg's upper point
 and the middle of the tibia) against the mapped terrain through the stance, and the foot's
 way to its foothold: a short leg folds up as its foot passes beside the hip and cannot lift
 it over a riser there from a body standing too low.
+
+The checks run compiled, point by point (:mod:`footfall.planning.clearance_kernels`): the
+planner asks them for every candidate foothold at every body height it tries.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
+from footfall.planning import clearance_kernels
 from footfall.robot.kinematics import LegKinematics
-from footfall.robot.planar import PlanarPose, inclined_to_level, level_to_inclined
+from footfall.robot.planar import PlanarPose
 
 # Points of the leg that must clear the terrain, as fractions of the way from the knee to
 # the foot: the knee and the middle of the tibia (the lower half stands over the foothold's
 # own edge margin).
-TIBIA_FRACTIONS = (0.0, 0.5)
+TIBIA_FRACTIONS = np.array([0.0, 0.5])
 # A swing's way is checked at this many points (a centimetre apart on a long step); within
 # SWING_END_RADIUS_M of either end the path stands over the footholds themselves and is not
 # checked (as the swing paths do) [m].
 SWING_SAMPLES = 24
 SWING_END_RADIUS_M = 0.03
+_SWING_FRACTIONS = np.linspace(0.0, 1.0, SWING_SAMPLES)
 
 
-def _inclines(poses: tuple[PlanarPose, ...], inclines: tuple[float, ...] | None) -> tuple:
-    """The body's pitch at each pose [rad]: ``inclines``, or level throughout."""
+class MapTerrain(NamedTuple):
+    """The mapped terrain as the checks sample it: the highest height around a point.
+
+    Attributes:
+        offsets: Shifts sampled around each point (a link's or a foot's radius), shape
+            (k, 2) [m].
+        heights: The map window's heights, shape (N, N), NaN where unknown [m].
+        origin_x: World x of the corner of cell ``[0, 0]`` [m].
+        origin_y: World y of that corner [m].
+        resolution: Cell side [m].
+    """
+
+    offsets: npt.NDArray[np.float64]
+    heights: npt.NDArray[np.float64]
+    origin_x: float
+    origin_y: float
+    resolution: float
+
+
+class FootholdChecks(NamedTuple):
+    """What a step's footholds are checked against (:func:`foothold_heights`).
+
+    Attributes:
+        reach_poses: Poses the leg must reach the foothold from, rows of :func:`pose_rows`.
+        reach_margin: Workspace margin of that reach [m].
+        swing_poses: Poses the foot may be lifted over the terrain from.
+        lift: Least height of the foot's centre above the terrain on its way [m].
+        stance_poses: Poses the leg stands under, its knee and tibia clear of the terrain.
+        clearance: Least gap between a link's centre line and the terrain [m].
+    """
+
+    reach_poses: npt.NDArray[np.float64]
+    reach_margin: float
+    swing_poses: npt.NDArray[np.float64]
+    lift: float
+    stance_poses: npt.NDArray[np.float64]
+    clearance: float
+
+
+def pose_rows(
+    poses: tuple[PlanarPose, ...], inclines: tuple[float, ...] | None = None
+) -> npt.NDArray[np.float64]:
+    """Poses as the compiled checks read them: rows ``(x, y, yaw, pitch)``, shape (p, 4).
+
+    ``inclines``: the body's pitch at each pose [rad]; level when None.
+    """
     if inclines is None:
-        return (0.0,) * len(poses)
+        inclines = (0.0,) * len(poses)
     if len(inclines) != len(poses):
         raise ValueError(f"{len(poses)} poses need as many inclines, got {len(inclines)}")
-    return tuple(inclines)
-
-
-def to_body(
-    pose: PlanarPose,
-    points: npt.NDArray[np.float64],
-    heights: npt.NDArray[np.float64],
-    incline: float = 0.0,
-) -> npt.NDArray[np.float64]:
-    """World points in the body frame at each body height, shape (..., k, 3) [m].
-
-    The body stands at ``pose`` with its origin at each of ``heights`` (world z) and
-    pitched by ``incline`` [rad] (:func:`~footfall.robot.planar.level_to_inclined`).
-    """
-    in_body = np.repeat(pose.points_to_body(points)[..., None, :], len(heights), axis=-2)
-    in_body[..., 2] -= heights
-    return level_to_inclined(in_body, incline)
+    return np.array([(p.x, p.y, p.yaw, a) for p, a in zip(poses, inclines, strict=True)])
 
 
 def midway(a: PlanarPose, b: PlanarPose) -> PlanarPose:
@@ -64,43 +97,12 @@ def midway(a: PlanarPose, b: PlanarPose) -> PlanarPose:
     return PlanarPose(0.5 * (a.x + b.x), 0.5 * (a.y + b.y), a.yaw + 0.5 * turn)
 
 
-def legs_clear_heights(
-    kinematics: LegKinematics,
-    terrain_under: Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float64]],
-    leg: int,
-    feet: npt.NDArray[np.float64],
-    poses: tuple[PlanarPose, ...],
-    heights: npt.NDArray[np.float64],
-    clearance: float,
-    inclines: tuple[float, ...] | None = None,
-) -> npt.NDArray[np.bool_]:
-    """At which body heights the leg's knee and tibia stay clear of the mapped terrain.
+def _points(points: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    return np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
 
-    Args:
-        kinematics: The robot's leg kinematics.
-        terrain_under: Highest mapped height within a link's radius of world points, shape
-            (n, 2) -> (n,) [m]; ``-inf`` where unknown (an unknown cell does not refuse).
-        leg: Leg index.
-        feet: Foot centres in the world, shape (m, 3) [m].
-        poses: Body poses the foot stands under.
-        heights: Body heights in the world, shape (k,) [m].
-        clearance: Least gap between a link's centre line and the terrain [m].
-        inclines: The body's pitch at each pose [rad]; level when None.
 
-    Returns:
-        Shape (m, k).
-    """
-    ok = np.ones((len(feet), len(heights)), dtype=bool)
-    for pose, incline in zip(poses, _inclines(poses, inclines), strict=True):
-        in_body = to_body(pose, feet, heights, incline)
-        knees = kinematics.knees_in_body(leg, in_body)
-        for fraction in TIBIA_FRACTIONS:
-            level = inclined_to_level(knees + fraction * (in_body - knees), incline)
-            point = pose.points_to_world(level)
-            point[..., 2] += heights
-            under = terrain_under(point[..., :2].reshape(-1, 2)).reshape(ok.shape)
-            ok &= point[..., 2] >= under + clearance
-    return ok
+def _heights(heights: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    return np.ascontiguousarray(heights, dtype=np.float64)
 
 
 def reach_heights(
@@ -126,10 +128,12 @@ def reach_heights(
     Returns:
         Shape (k,) for one point, else (..., k).
     """
-    ok = np.ones((*np.shape(points)[:-1], len(heights)), dtype=bool)
-    for pose, incline in zip(poses, _inclines(poses, inclines), strict=True):
-        ok &= kinematics.reachable(leg, to_body(pose, points, heights, incline), margin)
-    return ok
+    flat, h = _points(points), _heights(heights)
+    out = np.ones((len(flat), len(h)), dtype=bool)
+    clearance_kernels.reach_heights(
+        flat, pose_rows(poses, inclines), h, int(leg), *kinematics.reach_arrays, margin, out
+    )
+    return out.reshape(*np.shape(points)[:-1], len(h))
 
 
 def stance_heights(
@@ -167,54 +171,65 @@ def stance_heights(
     return ok
 
 
-def swing_reach_heights(
+def foothold_heights(
     kinematics: LegKinematics,
-    terrain_under: Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float64]],
+    terrain: MapTerrain,
     leg: int,
+    centres: npt.NDArray[np.float64],
     start: npt.NDArray[np.float64],
-    ends: npt.NDArray[np.float64],
-    poses: tuple[PlanarPose, ...],
     heights: npt.NDArray[np.float64],
-    lift: float,
-    inclines: tuple[float, ...] | None = None,
+    checks: FootholdChecks,
 ) -> npt.NDArray[np.bool_]:
-    """At which body heights the leg can lift its foot over the terrain to each end.
+    """At which body heights the leg reaches, swings to and stands on each foothold centre.
 
-    The swing path clears the mapped terrain on its way (beyond ``SWING_END_RADIUS_M`` of
-    either end, as the path does): at every point of the way where that lifts the foot
-    above the straight line between its ends, the leg must reach the foot from one of the
-    poses (the body now or at touchdown).
+    The leg reaches the centre from every reach pose; it can lift its foot over the terrain
+    on the way (beyond ``SWING_END_RADIUS_M`` of either end, as the swing path does, every
+    point of the straight way where that lifts the foot above the line is reached from one
+    of the swing poses); and its knee and the middle of its tibia keep ``clearance`` above
+    the terrain from every stance pose. Each check runs only on the heights the ones
+    before left open (:mod:`footfall.planning.clearance_kernels`).
 
     Args:
         kinematics: The robot's leg kinematics.
-        terrain_under: As for :func:`legs_clear_heights`.
+        terrain: The map, sampled within a link's radius of each point (an unknown cell
+            does not refuse).
         leg: Leg index.
+        centres: Candidate foot centres in the world, shape (m, 3) [m].
         start: Where the foot lifts off, shape (3,) [m].
-        ends: Candidate foot centres, shape (m, 3) [m].
-        poses: Body poses the foot may be lifted from.
         heights: Body heights in the world, shape (k,) [m].
-        lift: Least height of the foot's centre above the terrain on the way [m].
-        inclines: The body's pitch at each pose [rad]; level when None.
+        checks: The step's poses and margins.
 
     Returns:
         Shape (m, k).
     """
-    fraction = np.linspace(0.0, 1.0, SWING_SAMPLES)
-    way = ends[:, None, :] - start
-    points = start + fraction[None, :, None] * way  # (m, n, 3): the straight line
-    length = np.linalg.norm(way[..., :2], axis=2)
-    far = (fraction * length > SWING_END_RADIUS_M) & (
-        (1.0 - fraction) * length > SWING_END_RADIUS_M
+    points, h = _points(centres), _heights(heights)
+    out = np.ones((len(points), len(h)), dtype=bool)
+    geometry = kinematics.reach_arrays
+    clearance_kernels.reach_heights(
+        points, checks.reach_poses, h, int(leg), *geometry, checks.reach_margin, out
     )
-    need = terrain_under(points[..., :2].reshape(-1, 2)).reshape(far.shape) + lift
-    lifted = far & np.isfinite(need) & (need > points[..., 2])
-    ok = np.ones((len(ends), len(heights)), dtype=bool)
-    if not lifted.any():
-        return ok
-    over = points[lifted]
-    over[:, 2] = need[lifted]
-    reached = np.zeros((len(over), len(heights)), dtype=bool)
-    for pose, incline in zip(poses, _inclines(poses, inclines), strict=True):
-        reached |= reach_heights(kinematics, leg, over, (pose,), heights, 0.0, (incline,))
-    np.logical_and.at(ok, np.nonzero(lifted)[0], reached)
-    return ok
+    clearance_kernels.swing_reach_heights(
+        np.ascontiguousarray(start, dtype=np.float64),
+        points,
+        checks.swing_poses,
+        h,
+        checks.lift,
+        _SWING_FRACTIONS,
+        SWING_END_RADIUS_M,
+        terrain,
+        int(leg),
+        *geometry,
+        out,
+    )
+    clearance_kernels.legs_clear_heights(
+        points,
+        checks.stance_poses,
+        h,
+        TIBIA_FRACTIONS,
+        checks.clearance,
+        terrain,
+        np.ascontiguousarray(kinematics.mounts_in_body[leg]),
+        geometry[1],
+        out,
+    )
+    return out

@@ -32,17 +32,25 @@ def highest_within(points, offsets, heights, origin_x, origin_y, resolution, out
         resolution: Cell side [m].
         out: Result, shape (m,): ``-inf`` where no sample is on a known cell [m].
     """
-    n = heights.shape[0]
     for i in range(points.shape[0]):
-        best = -np.inf
-        for k in range(offsets.shape[0]):
-            fi = math.floor((points[i, 0] + offsets[k, 0] - origin_x) / resolution)
-            fj = math.floor((points[i, 1] + offsets[k, 1] - origin_y) / resolution)
-            if 0 <= fi < n and 0 <= fj < n:
-                value = heights[int(fi), int(fj)]
-                if value > best:  # False for NaN
-                    best = value
-        out[i] = best
+        out[i] = highest_at(
+            points[i, 0], points[i, 1], offsets, heights, origin_x, origin_y, resolution
+        )
+
+
+@njit(cache=True, nogil=True)
+def highest_at(x, y, offsets, heights, origin_x, origin_y, resolution):
+    """The highest known height at ``(x, y)`` shifted by each offset; ``-inf`` if none [m]."""
+    n = heights.shape[0]
+    best = -np.inf
+    for k in range(offsets.shape[0]):
+        fi = math.floor((x + offsets[k, 0] - origin_x) / resolution)
+        fj = math.floor((y + offsets[k, 1] - origin_y) / resolution)
+        if 0 <= fi < n and 0 <= fj < n:
+            value = heights[int(fi), int(fj)]
+            if value > best:  # False for NaN
+                best = value
+    return best
 
 
 def foot_ring(radius: float) -> np.ndarray:

@@ -25,11 +25,12 @@ from footfall.planning.footholds import (
     registration_margin_cells,
 )
 from footfall.planning.leg_clearance import (
-    legs_clear_heights,
+    FootholdChecks,
+    MapTerrain,
+    foothold_heights,
     midway,
-    reach_heights,
+    pose_rows,
     stance_heights,
-    swing_reach_heights,
 )
 from footfall.planning.plan_kernels import foot_ring, highest_within
 from footfall.planning.step_plan import FootholdPlan, NoFoothold, StepPoses
@@ -110,6 +111,7 @@ class TerrainPlanner:
         self.region_jumps = 0
         self._search: FootholdSearch | None = None
         self._ring = foot_ring(spec.foot_radius)
+        self._terrain: MapTerrain | None = None
 
     def update(self, snapshot: MapSnapshot, scores: ScoreMap) -> None:
         """Take a new map and its scores."""
@@ -117,6 +119,9 @@ class TerrainPlanner:
             self._search = FootholdSearch(self.config.footholds, snapshot.resolution)
         self.snapshot = snapshot
         self.scores = scores
+        ox, oy = (float(v) for v in snapshot.origin)
+        heights = np.asarray(snapshot.heights, dtype=np.float64)
+        self._terrain = MapTerrain(self._ring, heights, ox, oy, float(snapshot.resolution))
         self.version += 1
 
     # Map look-ups -----------------------------------------------------------------------
@@ -146,15 +151,11 @@ class TerrainPlanner:
     def terrain_under(self, xy: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Highest mapped height within a foot radius of each point [m]; -inf if unknown."""
         p = np.ascontiguousarray(np.atleast_2d(np.asarray(xy, dtype=np.float64)))
-        if self.snapshot is None:
+        if self._terrain is None:
             return np.full(p.shape[:-1], -np.inf)
-        snapshot = self.snapshot
         points = p.reshape(-1, 2)
         out = np.empty(len(points))
-        ox, oy = (float(v) for v in snapshot.origin)
-        highest_within(
-            points, self._ring, snapshot.heights, ox, oy, float(snapshot.resolution), out
-        )
+        highest_within(points, *self._terrain, out)
         return out.reshape(p.shape[:-1])
 
     # Footholds ----------------------------------------------------------------------------
@@ -191,7 +192,8 @@ class TerrainPlanner:
         Returns:
             The plan, or why there is none (naming the leg).
         """
-        if self.scores is None or self.snapshot is None or self._search is None:
+        terrain = self._terrain
+        if self.scores is None or self.snapshot is None or self._search is None or terrain is None:
             return NoFoothold("no map yet: the camera has not seen the ground ahead")
         c = self.config
         r = self.spec.foot_radius
@@ -226,7 +228,15 @@ class TerrainPlanner:
         )
         # Its leg clears the terrain while the foot stands, from touchdown to lift-off.
         stance_poses = (poses.touchdown, midway(poses.touchdown, poses.liftoff), poses.liftoff)
-        kin, under, r_link = self.kinematics, self.terrain_under, self.spec.foot_radius
+        kin, r_link = self.kinematics, self.spec.foot_radius
+        checks = FootholdChecks(
+            pose_rows(reach_poses, (now, step, step)),
+            c.reach_margin,
+            pose_rows((poses.now, poses.touchdown), (now, step)),
+            c.swing_clearance + r_link,
+            pose_rows(stance_poses, (step,) * 3),
+            r_link + c.min_body_clearance,
+        )
 
         def place(order: list[int]) -> FootholdPlan | NoFoothold:
             """Each leg's foothold in turn, each narrowing the body heights the next may use."""
@@ -241,18 +251,7 @@ class TerrainPlanner:
                     centres: npt.NDArray[np.float64], leg: int = leg
                 ) -> npt.NDArray[np.bool_]:
                     """Heights at which the leg reaches, swings to and stands on each centre."""
-                    reach = reach_heights(
-                        kin, leg, centres, reach_poses, heights, c.reach_margin, (now, step, step)
-                    )
-                    lift = c.swing_clearance + r_link
-                    swing_poses = (poses.now, poses.touchdown)
-                    reach &= swing_reach_heights(
-                        kin, under, leg, feet[leg], centres, swing_poses, heights, lift, (now, step)
-                    )
-                    clearance = r_link + c.min_body_clearance
-                    return reach & legs_clear_heights(
-                        kin, under, leg, centres, stance_poses, heights, clearance, (step,) * 3
-                    )
+                    return foothold_heights(kin, terrain, leg, centres, feet[leg], heights, checks)
 
                 def first_accepted(
                     points: npt.NDArray[np.float64],

@@ -54,7 +54,9 @@ class LegKinematics:
 
         self._reach_kernel = reached
         lengths = np.array([self.L1, self.L2, self.L3])
-        self._reach_geometry = (
+        # The legs as the compiled checks read them: geometry, lengths, lower and upper
+        # joint limits (footfall.robot.reach_kernel.reached).
+        self.reach_arrays = (
             leg_geometry(self.mounts_in_body, yaws),
             lengths,
             self.lower,
@@ -197,7 +199,7 @@ class LegKinematics:
             raise ValueError(f"feet of all legs need shape (..., 6, 3), got {p.shape}")
         points = p.reshape(-1, 3)
         out = np.empty(len(points), dtype=np.bool_)
-        self._reach_kernel(points, leg, *self._reach_geometry, margin, out)
+        self._reach_kernel(points, leg, *self.reach_arrays, margin, out)
         return out.reshape(p.shape[:-1])
 
     def _femur_tibia(

@@ -21,6 +21,33 @@ MOUNT_X, MOUNT_Y, MOUNT_Z, COS_YAW, SIN_YAW = range(5)
 
 
 @njit(cache=True, nogil=True)
+def reaches(x, y, z, k, geometry, lengths, lower, upper, margin):
+    """Whether leg ``k`` reaches the foot position ``(x, y, z)`` in the body frame [m]."""
+    l1, l2, l3 = lengths[0], lengths[1], lengths[2]
+    slack = margin / l3
+    px = x - geometry[k, MOUNT_X]
+    py = y - geometry[k, MOUNT_Y]
+    z = z - geometry[k, MOUNT_Z]
+    c, s = geometry[k, COS_YAW], geometry[k, SIN_YAW]
+    lx = c * px + s * py
+    ly = -s * px + c * py
+    r = math.hypot(lx, ly) - l1
+    reach = math.hypot(r, z)
+    if not (abs(l2 - l3) + margin <= reach and reach <= l2 + l3 - margin):
+        return False
+    cos_knee = (r * r + z * z - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+    t3 = -math.acos(min(max(cos_knee, -1.0), 1.0))
+    t2 = math.atan2(z, r) - math.atan2(l3 * math.sin(t3), l2 + l3 * math.cos(t3))
+    t2 = (t2 + math.pi) % (2.0 * math.pi) - math.pi
+    t1 = math.atan2(ly, lx)
+    return (
+        lower[0] + slack <= t1 <= upper[0] - slack
+        and lower[1] + slack <= t2 <= upper[1] - slack
+        and lower[2] + slack <= t3 <= upper[2] - slack
+    )
+
+
+@njit(cache=True, nogil=True)
 def reached(points, leg, geometry, lengths, lower, upper, margin, out):
     """Fill ``out`` with whether each foot position is reached.
 
@@ -35,33 +62,11 @@ def reached(points, leg, geometry, lengths, lower, upper, margin, out):
         margin: Workspace margin [m].
         out: Result, shape (n,).
     """
-    l1, l2, l3 = lengths[0], lengths[1], lengths[2]
-    nearest = abs(l2 - l3) + margin
-    farthest = l2 + l3 - margin
-    slack = margin / l3
     for i in range(points.shape[0]):
         k = i % 6 if leg < 0 else leg
-        px = points[i, 0] - geometry[k, MOUNT_X]
-        py = points[i, 1] - geometry[k, MOUNT_Y]
-        z = points[i, 2] - geometry[k, MOUNT_Z]
-        c, s = geometry[k, COS_YAW], geometry[k, SIN_YAW]
-        x = c * px + s * py
-        y = -s * px + c * py
-        r = math.hypot(x, y) - l1
-        reach = math.hypot(r, z)
-        ok = nearest <= reach and reach <= farthest
-        if ok:
-            cos_knee = (r * r + z * z - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-            t3 = -math.acos(min(max(cos_knee, -1.0), 1.0))
-            t2 = math.atan2(z, r) - math.atan2(l3 * math.sin(t3), l2 + l3 * math.cos(t3))
-            t2 = (t2 + math.pi) % (2.0 * math.pi) - math.pi
-            t1 = math.atan2(y, x)
-            ok = (
-                lower[0] + slack <= t1 <= upper[0] - slack
-                and lower[1] + slack <= t2 <= upper[1] - slack
-                and lower[2] + slack <= t3 <= upper[2] - slack
-            )
-        out[i] = ok
+        out[i] = reaches(
+            points[i, 0], points[i, 1], points[i, 2], k, geometry, lengths, lower, upper, margin
+        )
 
 
 def leg_geometry(mounts_in_body: np.ndarray, yaws: np.ndarray) -> np.ndarray:
