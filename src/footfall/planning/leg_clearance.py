@@ -22,7 +22,6 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from footfall.planning import clearance_kernels
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 
@@ -128,6 +127,8 @@ def reach_heights(
     Returns:
         Shape (k,) for one point, else (..., k).
     """
+    from footfall.planning import clearance_kernels  # numba, loaded when first asked
+
     flat, h = _points(points), _heights(heights)
     out = np.ones((len(flat), len(h)), dtype=bool)
     clearance_kernels.reach_heights(
@@ -202,6 +203,8 @@ def foothold_heights(
     Returns:
         Shape (m, k).
     """
+    from footfall.planning import clearance_kernels  # numba, loaded when first asked
+
     points, h = _points(centres), _heights(heights)
     out = np.ones((len(points), len(h)), dtype=bool)
     geometry = kinematics.reach_arrays
