@@ -150,43 +150,6 @@ def test_the_ground_median_is_that_of_the_valid_heights_in_the_window(seed, half
             assert np.allclose(g, expected, rtol=0, atol=1e-12)
 
 
-def _numpy_masked_median(heights, valid, half_cells):
-    """The ground median as NumPy took it before it was compiled (the reference)."""
-    from numpy.lib.stride_tricks import sliding_window_view
-
-    step = traversability.MEDIAN_STRIDE
-    half = max(1, round(half_cells / step))
-    sub = np.where(valid[::step, ::step], heights[::step, ::step], np.inf)
-    windows = sliding_window_view(np.pad(sub, half, mode="reflect"), (2 * half + 1,) * 2)
-    ordered = np.sort(windows.reshape(*sub.shape, -1), axis=-1)
-    count = np.isfinite(ordered).sum(axis=-1)
-    low = np.take_along_axis(ordered, np.maximum(count - 1, 0)[..., None] // 2, axis=-1)
-    high = np.take_along_axis(ordered, (count // 2)[..., None], axis=-1)
-    median = np.where(count > 0, 0.5 * (low[..., 0] + high[..., 0]), np.inf)
-    full = np.repeat(np.repeat(median, step, axis=0), step, axis=1)
-    return full[: heights.shape[0], : heights.shape[1]]
-
-
-@given(
-    st.integers(0, 2**32 - 1),
-    st.integers(4, 50),
-    st.integers(4, 50),
-    st.integers(1, 12),
-    st.floats(0.0, 1.0),
-)
-@settings(max_examples=80, deadline=None)
-def test_the_compiled_ground_median_is_the_numpy_one_sides_included(seed, rows, cols, half, share):
-    """Equal value for value to the NumPy form it replaced, mirrored sides and grids whose
-    sides are no multiple of the sampling step included."""
-    rng = np.random.default_rng(seed)
-    heights = np.round(rng.normal(0.0, 0.1, (rows, cols)), 3)  # ties, as a map's have
-    valid = rng.random((rows, cols)) < share
-    np.testing.assert_array_equal(
-        traversability._masked_median(heights, valid, half),
-        _numpy_masked_median(heights, valid, half),
-    )
-
-
 def test_a_tall_box_is_lethal_within_the_legs_span_and_a_low_step_is_not():
     """A 30 cm block rules out every body position whose legs would reach it; a 5 cm step
     costs nothing extra: the legs climb it."""

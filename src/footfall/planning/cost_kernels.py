@@ -8,8 +8,6 @@
   ``r`` passes and the one octagon agree on.
 - The unseen cells enclosed along a row or a column by seen ground without a foothold, one
   side deep (a trench's floor between its rims), in one scan of each row and column.
-- The ground level under the legs' span: the median of the valid heights around each
-  sampled cell, without the sorted copy of every window NumPy's form made.
 """
 
 from __future__ import annotations
@@ -109,45 +107,3 @@ def enclosed_unseen(known, usable, deep, max_run, out):
                         out[line, m] = True
                     else:
                         out[m, line] = True
-
-
-@njit(cache=True, nogil=True)
-def _reflected(t, n):
-    """Index ``t`` of an axis of ``n`` cells mirrored at its ends (``numpy.pad`` "reflect")."""
-    if n == 1:
-        return 0
-    period = 2 * (n - 1)
-    t = abs(t) % period
-    return period - t if t >= n else t
-
-
-@njit(cache=True, nogil=True)
-def strided_median(sub, half, step, out):
-    """Median of the finite values in each square of half-side ``half`` of ``sub``.
-
-    ``sub`` is a map sampled on every ``step``-th cell, +inf where a cell does not count;
-    its sides are mirrored (``numpy.pad`` "reflect"). Each median is the middle of the
-    sorted finite values (the mean of the two middle ones for an even count), +inf where
-    there are none, and is written to the ``step`` x ``step`` cells of ``out`` its sample
-    stands for.
-    """
-    n, m = sub.shape
-    side = 2 * half + 1
-    buffer = np.empty(side * side)
-    for i in range(n):
-        for j in range(m):
-            count = 0
-            for a in range(i - half, i + half + 1):
-                row = _reflected(a, n)
-                for b in range(j - half, j + half + 1):
-                    value = sub[row, _reflected(b, m)]
-                    if value < np.inf:
-                        buffer[count] = value
-                        count += 1
-            median = np.inf
-            if count > 0:
-                ordered = np.sort(buffer[:count])
-                median = 0.5 * (ordered[(count - 1) // 2] + ordered[count // 2])
-            for a in range(i * step, min((i + 1) * step, out.shape[0])):
-                for b in range(j * step, min((j + 1) * step, out.shape[1])):
-                    out[a, b] = median

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from numpy.lib.stride_tricks import sliding_window_view
 from scipy import ndimage
 
 from footfall.checks import require_non_negative, require_positive
@@ -203,15 +204,19 @@ def _masked_median(
     Taken on every ``MEDIAN_STRIDE``-th cell along each axis (every cell of the window
     costs a second on a 256 x 256 map), with the map's sides mirrored. Each window's
     samples are sorted with the cells that are not valid last, and the middle of the valid
-    ones taken (:func:`~footfall.planning.cost_kernels.strided_median`). A window with no
-    valid cell gives +inf.
+    ones taken. A window with no valid cell gives +inf.
     """
     step = MEDIAN_STRIDE
     half = max(1, round(half_cells / step))
-    sub = np.ascontiguousarray(np.where(valid[::step, ::step], heights[::step, ::step], np.inf))
-    out = np.empty(heights.shape)
-    cost_kernels.strided_median(sub, half, step, out)
-    return out
+    sub = np.where(valid[::step, ::step], heights[::step, ::step], np.inf)
+    windows = sliding_window_view(np.pad(sub, half, mode="reflect"), (2 * half + 1,) * 2)
+    ordered = np.sort(windows.reshape(*sub.shape, -1), axis=-1)
+    count = np.isfinite(ordered).sum(axis=-1)
+    low = np.take_along_axis(ordered, np.maximum(count - 1, 0)[..., None] // 2, axis=-1)
+    high = np.take_along_axis(ordered, (count // 2)[..., None], axis=-1)
+    median = np.where(count > 0, 0.5 * (low[..., 0] + high[..., 0]), np.inf)
+    full = np.repeat(np.repeat(median, step, axis=0), step, axis=1)
+    return full[: heights.shape[0], : heights.shape[1]]
 
 
 def _box_mean(
