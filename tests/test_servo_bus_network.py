@@ -34,6 +34,22 @@ def footfall(*args: str) -> subprocess.Popen:
     )
 
 
+def stopped_saying(*processes: subprocess.Popen | None) -> str:
+    """What processes said, once stopped with Ctrl-C (for a failing assertion's message)."""
+    said = []
+    for process in processes:
+        if process is None:
+            continue
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+        try:
+            said.append(process.communicate(timeout=20)[0].decode(errors="replace")[-4000:])
+        except subprocess.TimeoutExpired:
+            process.kill()
+            said.append(process.communicate(timeout=5)[0].decode(errors="replace")[-4000:])
+    return "\n---\n".join(said)
+
+
 def start_servo_bus(link, *args: str) -> subprocess.Popen:
     """`footfall servo-bus` on flat ground serving its servos at ``link``, once it is there."""
     server = footfall("servo-bus", "--sim", "flat", "--link", str(link), "--seconds", "90", *args)
@@ -74,7 +90,10 @@ def test_the_robot_process_walks_on_the_emulated_bus_and_stops_on_the_watchdog(t
                 station.publish(WalkCommand.TOPIC, WalkCommand(speed=0.05, stamp=now))
                 return status[-1].steps_taken >= 4
 
-            assert wait_for(station, walking, 60)
+            assert wait_for(station, walking, 60), (
+                f"last status {status[-1]}; postures {postures[-3:]}\n"
+                + stopped_saying(robot, server)
+            )
             assert Posture.RISING in postures and postures[-1] is Posture.STANDING
             assert status[-1].mode is Mode.WALKING
             # No more commands: the watchdog stands the robot still.
