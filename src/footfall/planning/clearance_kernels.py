@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from footfall.planning.plan_kernels import highest_at
@@ -23,17 +24,29 @@ from footfall.robot.reach_kernel import reaches
 
 
 @njit(cache=True, nogil=True)
-def _to_body(px, py, pz, pose, height):
-    """A world point in the body frame of ``pose`` with its origin at ``height`` [m]."""
-    c, s = math.cos(pose[2]), math.sin(pose[2])
+def _turns(poses):
+    """Each pose's heading and pitch as cosines and sines, rows ``(cy, sy, cp, sp)``."""
+    out = np.empty((poses.shape[0], 4))
+    for p in range(poses.shape[0]):
+        out[p, 0], out[p, 1] = math.cos(poses[p, 2]), math.sin(poses[p, 2])
+        out[p, 2], out[p, 3] = math.cos(poses[p, 3]), math.sin(poses[p, 3])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _to_body(px, py, pz, pose, turn, height):
+    """A world point in the body frame of ``pose`` with its origin at ``height`` [m].
+
+    ``turn``: the pose's row of :func:`_turns`.
+    """
+    c, s = turn[0], turn[1]
     dx, dy = px - pose[0], py - pose[1]
     x = c * dx + s * dy
     y = -s * dx + c * dy
     z = pz - height
-    pitch = pose[3]
-    if pitch == 0.0:
+    if pose[3] == 0.0:
         return x, y, z
-    cp, sp = math.cos(pitch), math.sin(pitch)
+    cp, sp = turn[2], turn[3]
     return cp * x - sp * z, y, sp * x + cp * z
 
 
@@ -53,12 +66,14 @@ def reach_heights(points, poses, heights, leg, geometry, lengths, lower, upper, 
         margin: Workspace margin [m].
         out: Shape (m, k), updated in place.
     """
+    turns = _turns(poses)
     for i in range(points.shape[0]):
+        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
         for k in range(heights.shape[0]):
             for p in range(poses.shape[0]):
                 if not out[i, k]:
                     break
-                x, y, z = _to_body(points[i, 0], points[i, 1], points[i, 2], poses[p], heights[k])
+                x, y, z = _to_body(px, py, pz, poses[p], turns[p], heights[k])
                 if not reaches(x, y, z, leg, geometry, lengths, lower, upper, margin):
                     out[i, k] = False
 
@@ -89,6 +104,7 @@ def swing_reach_heights(
     :func:`~footfall.planning.plan_kernels.highest_at` reads it.
     """
     offsets, grid, origin_x, origin_y, resolution = terrain
+    turns = _turns(poses)
     n = fractions.shape[0]
     for i in range(ends.shape[0]):
         wx, wy, wz = ends[i, 0] - start[0], ends[i, 1] - start[1], ends[i, 2] - start[2]
@@ -106,7 +122,7 @@ def swing_reach_heights(
                     continue
                 reached = False
                 for p in range(poses.shape[0]):
-                    x, y, z = _to_body(px, py, need, poses[p], heights[k])
+                    x, y, z = _to_body(px, py, need, poses[p], turns[p], heights[k])
                     if reaches(x, y, z, leg, geometry, lengths, lower, upper, 0.0):
                         reached = True
                         break
@@ -125,16 +141,17 @@ def legs_clear_heights(feet, poses, heights, fractions, clearance, terrain, moun
     """
     offsets, grid, origin_x, origin_y, resolution = terrain
     l1, l2, l3 = lengths[0], lengths[1], lengths[2]
+    turns = _turns(poses)
     for p in range(poses.shape[0]):
-        pose = poses[p]
-        c, s = math.cos(pose[2]), math.sin(pose[2])
+        pose, turn = poses[p], turns[p]
+        c, s = turn[0], turn[1]
         back = -pose[3]
         cb, sb = math.cos(back), math.sin(back)
         for i in range(feet.shape[0]):
             for k in range(heights.shape[0]):
                 if not out[i, k]:
                     continue
-                x, y, z = _to_body(feet[i, 0], feet[i, 1], feet[i, 2], pose, heights[k])
+                x, y, z = _to_body(feet[i, 0], feet[i, 1], feet[i, 2], pose, turn, heights[k])
                 # The knee (LegKinematics.knees_in_body, point by point).
                 qx, qy, qz = x - mount[0], y - mount[1], z - mount[2]
                 d = math.hypot(qx, qy)

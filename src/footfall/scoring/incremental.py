@@ -116,12 +116,15 @@ class IncrementalScorer:
             boxes += [(0, r + max(-di, 0), 0, m), (n - r - max(di, 0), n, 0, m)]
         if dj:
             boxes += [(0, n, 0, r + max(-dj, 0)), (0, n, m - r - max(dj, 0), m)]
-        # The boxes with their context may cost more than the window (a camera that sees most
-        # of it, moving): then the window is scored whole.
-        work = 0
+        # Each box cut at the window's border, and the map within REACH of it (its context).
+        parts = []
         for i0, i1, j0, j1 in boxes:
             i0, i1, j0, j1 = max(i0, 0), min(i1, n), max(j0, 0), min(j1, m)
-            work += (min(i1 + r, n) - max(i0 - r, 0)) * (min(j1 + r, m) - max(j0 - r, 0))
+            context = (max(i0 - r, 0), min(i1 + r, n), max(j0 - r, 0), min(j1 + r, m))
+            parts.append(((i0, i1, j0, j1), context))
+        # The contexts may cost more than the window (a camera that sees most of it,
+        # moving): then the window is scored whole.
+        work = sum((a1 - a0) * (b1 - b0) for _, (a0, a1, b0, b1) in parts)
         if work >= n * m:
             self.cells_scored = n * m
             return score_map(snapshot, self.config)
@@ -131,13 +134,9 @@ class IncrementalScorer:
             else getattr(scores, name).copy()
             for name in _SCORES
         }
-        self.cells_scored = 0
-        for i0, i1, j0, j1 in boxes:
-            i0, i1, j0, j1 = max(i0, 0), min(i1, n), max(j0, 0), min(j1, m)
-            # The map within REACH of the box, cut at the window's own border only.
-            a0, a1, b0, b1 = max(i0 - r, 0), min(i1 + r, n), max(j0 - r, 0), min(j1 + r, m)
+        self.cells_scored = work
+        for (i0, i1, j0, j1), (a0, a1, b0, b1) in parts:
             part = score_map(self._window(snapshot, a0, a1, b0, b1), self.config)
-            self.cells_scored += (a1 - a0) * (b1 - b0)
             inner = (slice(i0 - a0, i1 - a0), slice(j0 - b0, j1 - b0))
             for name in _SCORES:
                 out[name][i0:i1, j0:j1] = getattr(part, name)[inner]
