@@ -81,7 +81,7 @@ def main() -> dict[str, float]:
     spec = load_spec("default")
     span = span_radius(spec)
     update = obstacle_map()
-    config = NavigationConfig()
+    config = NavigationConfig().for_robot(spec)
     start, goal = (0.0, 0.0), (4.0, 0.3)
     grid = cost_grid(update, TraversabilityConfig(), span)
     plan_route(grid, start, goal, config)  # compile

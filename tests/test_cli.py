@@ -270,7 +270,7 @@ def test_bench_terrain_walks_every_robot_and_gait(tmp_path, monkeypatch, capsys)
     assert (out / "bench.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     spec = load_spec("phantomx")
     m = walk_variant(Variant("phantomx", "wave"), "stairs", seed=0, seconds=1.0).metrics
-    top = GaitConfig(kind="wave").for_robot(spec.stride_length, spec.max_step_height).max_speed
+    top = GaitConfig(kind="wave").for_robot(spec).max_speed
     assert (m.setup.robot, m.setup.gait) == ("phantomx", "wave")
     assert m.setup.commanded_body_height_m == spec.body_height
     assert m.setup.stride_m == spec.stride_length

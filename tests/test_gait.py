@@ -19,6 +19,7 @@ from footfall.motion.gait import (
     swing_groups,
     tripod_swing_set,
 )
+from footfall.robot.spec import load_spec
 
 
 @pytest.mark.parametrize(("kind", "duty"), [("tripod", 1 / 2), ("ripple", 2 / 3), ("wave", 5 / 6)])
@@ -67,7 +68,7 @@ def test_tripod_set_inverts_when_the_leading_leg_is_extended(default_spec):
 @settings(max_examples=100, deadline=None)
 def test_step_duration_keeps_speed_and_bounds(kind, fraction):
     """Below the top speed the step timing delivers the speed: stride <= the robot's."""
-    config = GaitConfig(kind=kind).for_robot(0.15, 0.1)
+    config = GaitConfig(kind=kind).for_robot(load_spec("default"))
     speed = fraction * config.max_speed
     duration = config.step_duration(speed)
     assert config.min_step_duration <= duration <= config.max_step_duration
@@ -78,7 +79,7 @@ def test_step_duration_keeps_speed_and_bounds(kind, fraction):
 
 def test_top_speed_follows_eq_5_14():
     """V = S / (D tau) with the body-frame stroke D*S: the tripod's top speed."""
-    config = GaitConfig(kind="tripod", min_step_duration=0.3).for_robot(0.15, 0.1)
+    config = GaitConfig(kind="tripod", min_step_duration=0.3).for_robot(load_spec("default"))
     tau = 2 * 0.3
     stroke = config.duty_factor * 0.15
     assert config.max_speed == pytest.approx(stroke / (config.duty_factor * tau))

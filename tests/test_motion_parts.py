@@ -27,9 +27,10 @@ from footfall.planning.step_plan import NoFoothold
 from footfall.planning.terrain_planner import TerrainPlanner
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
+from footfall.robot.spec import load_spec
 from footfall.scoring.walkability import score_map
 
-TRIPOD = GaitConfig(kind="tripod").for_robot(0.15, 0.10)
+TRIPOD = GaitConfig(kind="tripod").for_robot(load_spec("default"))
 NO_FEEDBACK = BodyFeedback(None, None)
 
 
@@ -206,7 +207,7 @@ def test_a_step_started_while_the_body_accelerates_is_timed_for_the_command(any_
     the body will reach the commanded speed before the step ends. The step is timed for
     the command, so the supporting feet travel no more than a stride; timed for the twist
     at its start it would last the longest step and they would trail twice as far."""
-    gait = GaitConfig(kind="tripod").for_robot(any_spec.stride_length, any_spec.max_step_height)
+    gait = GaitConfig(kind="tripod").for_robot(any_spec)
     rest = any_spec.rest_feet_in_body()
     s = GaitScheduler(gait, rest, any_spec.mount_positions_in_body)
     shaper = CommandShaper(gait, any_spec.body_height)

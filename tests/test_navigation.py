@@ -178,9 +178,9 @@ def test_a_deep_narrow_trench_is_straddled_and_a_wide_pit_is_not(width):
     assert np.isfinite(grid.cost[np.abs(x - 0.5) < 0.03]).all()
     pit = np.where(np.hypot(x - 0.5, y - 0.5) <= 0.6, -0.3, 0.0)
     wide = cost_grid(_update(pit), TraversabilityConfig(), SPAN)
-    into = plan_route(wide, (-0.8, 0.5), (0.5, 0.5), NavigationConfig())
+    into = plan_route(wide, (-0.8, 0.5), (0.5, 0.5), NavigationConfig().for_robot(SPEC))
     assert isinstance(into, NoRoute)
-    past = plan_route(wide, (-0.8, 0.5), (1.8, 0.5), NavigationConfig())
+    past = plan_route(wide, (-0.8, 0.5), (1.8, 0.5), NavigationConfig().for_robot(SPEC))
     assert isinstance(past, Route)
     p = past.points_in_world
     samples = np.concatenate(
@@ -242,7 +242,7 @@ def test_a_route_never_enters_a_lethal_cell(seed, boxes):
         )
     grid = cost_grid(_update(h), TraversabilityConfig(), SPAN)
     start, goal = (-0.7, 0.5), (1.7, 0.5)
-    route = plan_route(grid, start, goal, NavigationConfig())
+    route = plan_route(grid, start, goal, NavigationConfig().for_robot(SPEC))
     start_cell = grid.cell_of(start)
     if isinstance(route, NoRoute):
         assert "goal" in route.reason
@@ -262,7 +262,7 @@ def test_a_wall_is_gone_round_and_an_enclosed_goal_has_no_route():
     x, y = _grid_xy()
     wall = np.where((np.abs(x - 0.5) <= 0.05) & (y < 1.1), 0.3, 0.0)
     grid = cost_grid(_update(wall), TraversabilityConfig(), SPAN)
-    route = plan_route(grid, (-0.5, 0.0), (1.5, 0.0), NavigationConfig())
+    route = plan_route(grid, (-0.5, 0.0), (1.5, 0.0), NavigationConfig().for_robot(SPEC))
     assert isinstance(route, Route)
     assert route.points_in_world[:, 1].max() > 1.1 + SPAN - 0.05
     pen = np.where(
@@ -272,7 +272,7 @@ def test_a_wall_is_gone_round_and_an_enclosed_goal_has_no_route():
         0.0,
     )
     closed = cost_grid(_update(pen), TraversabilityConfig(), SPAN)
-    result = plan_route(closed, (-0.7, 0.5), (1.2, 0.5), NavigationConfig())
+    result = plan_route(closed, (-0.7, 0.5), (1.2, 0.5), NavigationConfig().for_robot(SPEC))
     assert isinstance(result, NoRoute)
     assert "no route" in result.reason or "cannot stand" in result.reason
 
@@ -281,7 +281,7 @@ def test_a_goal_beyond_the_map_is_headed_for_over_its_edge():
     """An off-map goal: the route leaves the window towards it and ends at the goal."""
     x, _ = _grid_xy()
     grid = cost_grid(_update(np.zeros_like(x)), TraversabilityConfig(), SPAN)
-    route = plan_route(grid, (0.0, 0.5), (6.0, 0.5), NavigationConfig())
+    route = plan_route(grid, (0.0, 0.5), (6.0, 0.5), NavigationConfig().for_robot(SPEC))
     assert isinstance(route, Route) and not route.goal_on_map
     np.testing.assert_allclose(route.points_in_world[-1], (6.0, 0.5))
     assert route.points_in_world[-2, 0] > 1.9  # the window's far edge

@@ -63,7 +63,7 @@ def _trench(width: float, hidden: bool = False, until_y: float = math.inf) -> Ma
 
 def _route(update: MapUpdate, max_gap_m: float = STEP) -> Route | NoRoute:
     grid = cost_grid(update, TraversabilityConfig(), SPAN, max_gap_m=max_gap_m)
-    return plan_route(grid, (-0.6, 0.0), (1.7, 0.0), NavigationConfig())
+    return plan_route(grid, (-0.6, 0.0), (1.7, 0.0), NavigationConfig().for_robot(SPEC))
 
 
 def test_the_longest_gap_is_the_stride_and_the_search_reach():

@@ -25,9 +25,13 @@ from footfall.errors import ConfigError
 from footfall.motion.flow_swing import FlowConfig
 from footfall.motion.swing import SWINGS
 from footfall.registry import Registry
+from footfall.robot.scale import robot_scale
+from footfall.robot.spec import HexapodSpec
 
 # A walk's default body speed [m/s], lowered to 3/4 of the gait's top speed where that is less.
 DEFAULT_SPEED_MPS = 0.10
+# A supporting foot may trail this far beyond its stroke on the default robot [m].
+STROKE_MARGIN_M = 0.04
 
 
 @dataclass(frozen=True)
@@ -148,7 +152,8 @@ class GaitConfig:
         max_step_duration: Longest swing while walking [s]; slower walks shorten the stride.
         rest_step_duration: Swing duration when stepping back to the rest stance [s].
         stroke_margin: How far beyond its nominal stroke a supporting foot may trail before
-            the body slows down to wait for it [m].
+            the body slows down to wait for it [m]; None takes 4 cm on the default robot,
+            scaled to the robot's stride (:meth:`for_robot`).
         rest_tolerance: A foot this close to its rest position counts as at rest [m].
         retarget_tolerance: A swing target that moves more than this is re-planned [m].
         acceleration_limit: Body acceleration limit [m/s^2].
@@ -157,7 +162,8 @@ class GaitConfig:
         swing: The swing trajectory, a name in ``SWINGS``: ``"flow"`` (thesis §5.4.2) or
             ``"polynomial"`` (the §5.4.1 baseline).
         flow: Flow-function parameters.
-        polynomial_apex: Apex of the polynomial arc above the higher end [m].
+        polynomial_apex: Apex of the polynomial arc above the higher end [m]; None takes
+            the robot's ``max_step_height``.
         incline_limit: Steepest the body inclines along a slope or a flight of stairs
             [rad]; 0 keeps it level (:mod:`footfall.motion.incline`).
         incline_rate: Speed of the body's incline [rad/s].
@@ -170,7 +176,7 @@ class GaitConfig:
     min_step_duration: float = 0.3
     max_step_duration: float = 1.0
     rest_step_duration: float = 0.6
-    stroke_margin: float = 0.04
+    stroke_margin: float | None = None
     rest_tolerance: float = 0.005
     retarget_tolerance: float = 0.002
     acceleration_limit: float = 0.5
@@ -178,7 +184,7 @@ class GaitConfig:
     height_rate_limit: float = 0.07
     swing: str = "flow"
     flow: FlowConfig = field(default_factory=FlowConfig)
-    polynomial_apex: float = 0.1
+    polynomial_apex: float | None = None
     incline_limit: float = math.radians(20.0)
     incline_rate: float = 0.25
     incline_level_share: float = 0.4
@@ -229,13 +235,27 @@ class GaitConfig:
         """Fastest body speed this gait reaches at its stride and shortest step [m/s]."""
         return self.stride / (len(self.groups) * self.min_step_duration)
 
-    def for_robot(self, stride_length: float, max_step_height: float) -> GaitConfig:
-        """This config with the robot's stride and step-height cap filled in where unset."""
+    def for_robot(self, spec: HexapodSpec) -> GaitConfig:
+        """This config with the robot's own lengths filled in where unset.
+
+        The stride, the flow swing's height cap and the polynomial arc's apex are the
+        robot's; the stroke margin is the default robot's scaled to the robot's stride.
+        """
         flow = self.flow
         if flow.max_height is None:
-            flow = replace(flow, max_height=max_step_height)
-        stride = stride_length if self.stride_length is None else self.stride_length
-        return replace(self, stride_length=stride, flow=flow)
+            flow = replace(flow, max_height=spec.max_step_height)
+        margin = self.stroke_margin
+        if margin is None:
+            margin = STROKE_MARGIN_M * robot_scale(spec).stride
+        return replace(
+            self,
+            stride_length=spec.stride_length if self.stride_length is None else self.stride_length,
+            flow=flow,
+            stroke_margin=margin,
+            polynomial_apex=spec.max_step_height
+            if self.polynomial_apex is None
+            else self.polynomial_apex,
+        )
 
     def step_duration(self, foot_speed: float) -> float:
         """Swing duration for feet moving at ``foot_speed`` over the ground [s].

@@ -76,7 +76,7 @@ class WalkController:
         feedback: FeedbackConfig | None = None,
     ) -> None:
         self.spec = spec
-        self.config = (config or GaitConfig()).for_robot(spec.stride_length, spec.max_step_height)
+        self.config = (config or GaitConfig()).for_robot(spec)
         self.kinematics = LegKinematics(spec)
         self.planner = planner
         self.feedback = feedback

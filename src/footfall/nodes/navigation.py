@@ -169,7 +169,7 @@ class NavigatorNode:
     ) -> None:
         self.bus = bus
         self.meter = meter if meter is not None else CpuMeter()
-        self.config = config or NavigationConfig()
+        self.config = (config or NavigationConfig()).for_robot(spec)
         self.span_radius_m = span_radius(spec)
         self.max_gap_m = longest_gap(spec, foothold_search_m)
         self.goal: tuple[float, float] | None = None

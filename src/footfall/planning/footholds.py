@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -24,10 +24,13 @@ from footfall.checks import require_non_negative
 from footfall.errors import ConfigError
 from footfall.planning.plan_kernels import polygon_margin
 from footfall.planning.regions import Regions, steppable_regions
+from footfall.robot.scale import RobotScale
 from footfall.scoring.walkability import ScoreMap
 
 # The widest search, in cells of the map searched.
 MAX_SEARCH_CELLS = 500
+# The centre of mass keeps this far inside the support polygon on the default robot [m].
+STABILITY_MARGIN_M = 0.02
 
 
 @dataclass(frozen=True)
@@ -37,7 +40,8 @@ class FootholdConfig:
     Attributes:
         search_radius: Farthest a foothold may move from its nominal position [m].
         stability_margin: Least distance from the centre of mass to the edge of the support
-            polygon [m].
+            polygon [m]; None takes 2 cm on the default robot, scaled to the robot's span
+            (:meth:`for_robot`).
         edge_margin_cells: A candidate should also have every cell within this many cells
             valid: room for the foot's radius, tracking error and a map edge that is a cell
             off (a riser seen face-on lends its height to the cell before it).
@@ -54,7 +58,7 @@ class FootholdConfig:
     """
 
     search_radius: float = 0.16
-    stability_margin: float = 0.02
+    stability_margin: float | None = None
     edge_margin_cells: int = 2
     min_edge_margin_cells: int = 0
     region_hysteresis: float = 0.0
@@ -63,11 +67,18 @@ class FootholdConfig:
         require_non_negative(
             "foothold",
             search_radius=self.search_radius,
-            stability_margin=self.stability_margin,
             region_hysteresis=self.region_hysteresis,
         )
+        if self.stability_margin is not None:
+            require_non_negative("foothold", stability_margin=self.stability_margin)
         if not 0 <= self.min_edge_margin_cells <= self.edge_margin_cells:
             raise ConfigError("edge margins need 0 <= min_edge_margin_cells <= edge_margin_cells")
+
+    def for_robot(self, scale: RobotScale) -> FootholdConfig:
+        """This config with the robot's stability margin filled in where unset."""
+        if self.stability_margin is not None:
+            return self
+        return replace(self, stability_margin=STABILITY_MARGIN_M * scale.span)
 
 
 def sorted_offsets(radius_cells: float) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -35,6 +35,13 @@ from footfall.messages import WalkCommand
 from footfall.planning.route_kernels import dijkstra, taut_indices
 from footfall.planning.traversability import CostGrid, TraversabilityConfig
 from footfall.robot.planar import PlanarPose
+from footfall.robot.scale import robot_scale
+from footfall.robot.spec import HexapodSpec
+
+# Lengths of the robot's own size on the default robot, scaled to another robot's span [m]:
+# the lethal ground a robot standing on it may leave through, and the disc kept out of the
+# routes ahead of a robot frozen for want of footholds (its radius, and how far ahead).
+ROBOT_LENGTHS_M = {"escape_radius_m": 0.25, "blocked_radius_m": 0.15, "blocked_ahead_m": 0.25}
 
 
 @dataclass(frozen=True)
@@ -45,7 +52,8 @@ class NavigationConfig:
         traversability: The cost grid's settings.
         goal_tolerance_m: The goal is reached within this distance [m].
         escape_radius_m: A robot on a lethal cell may leave through lethal cells within
-            this of it [m].
+            this of it [m]; None takes 0.25 m on the default robot, scaled to the robot's
+            span (:meth:`for_robot`, as the two blocked lengths below).
         escape_cost: Cost per metre of such cells.
         replan_period_s: A route is replanned on the newest map once it is this old [s].
         switch_margin: Replanning, the ground along the route being walked costs this share
@@ -59,14 +67,15 @@ class NavigationConfig:
         turn_in_place_rad: Beyond this heading error the robot turns on the spot [rad].
         blocked_after_s: A walker frozen this long for want of footholds has its route
             blocked: the ground ahead of it is kept out of later routes [s].
-        blocked_radius_m: Radius of the kept-out disc [m].
-        blocked_ahead_m: Its centre lies this far ahead of the body [m].
+        blocked_radius_m: Radius of the kept-out disc [m]; None: 0.15 m on the default robot.
+        blocked_ahead_m: Its centre lies this far ahead of the body [m]; None: 0.25 m on the
+            default robot.
         blocked_for_s: How long a kept-out disc stays [s].
     """
 
     traversability: TraversabilityConfig = field(default_factory=TraversabilityConfig)
     goal_tolerance_m: float = 0.08
-    escape_radius_m: float = 0.25
+    escape_radius_m: float | None = None
     escape_cost: float = 30.0
     replan_period_s: float = 0.5
     switch_margin: float = 0.4
@@ -76,8 +85,8 @@ class NavigationConfig:
     max_yaw_rate: float = 0.3
     turn_in_place_rad: float = math.radians(50.0)
     blocked_after_s: float = 1.5
-    blocked_radius_m: float = 0.15
-    blocked_ahead_m: float = 0.25
+    blocked_radius_m: float | None = None
+    blocked_ahead_m: float | None = None
     blocked_for_s: float = 30.0
 
     def __post_init__(self) -> None:
@@ -95,14 +104,21 @@ class NavigationConfig:
         )
         require_non_negative(
             "navigation",
-            escape_radius_m=self.escape_radius_m,
             escape_cost=self.escape_cost,
             yaw_gain=self.yaw_gain,
-            blocked_radius_m=self.blocked_radius_m,
-            blocked_ahead_m=self.blocked_ahead_m,
+            **{k: v for k, v in self._robot_lengths().items() if v is not None},
         )
         if self.confirm_no_route < 1:
             raise ConfigError(f"confirm_no_route must be >= 1, got {self.confirm_no_route}")
+
+    def _robot_lengths(self) -> dict[str, float | None]:
+        return {name: getattr(self, name) for name in ROBOT_LENGTHS_M}
+
+    def for_robot(self, spec: HexapodSpec) -> NavigationConfig:
+        """This config with the lengths that follow the robot's span filled in where unset."""
+        span = robot_scale(spec).span
+        unset = [name for name, value in self._robot_lengths().items() if value is None]
+        return replace(self, **{name: ROBOT_LENGTHS_M[name] * span for name in unset})
 
 
 @dataclass(frozen=True)

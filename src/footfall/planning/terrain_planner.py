@@ -10,16 +10,12 @@ terrain under a swing path, which the path must clear.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
 
-from footfall.checks import require_non_negative, require_positive
-from footfall.errors import ConfigError
 from footfall.mapping.snapshot import MapSnapshot
 from footfall.planning.footholds import (
-    FootholdConfig,
     FootholdSearch,
     point_in_polygon_margin,
     registration_margin_cells,
@@ -33,53 +29,13 @@ from footfall.planning.leg_clearance import (
     stance_heights,
 )
 from footfall.planning.plan_kernels import foot_ring, highest_within
+from footfall.planning.planner_config import IN_PLACE_TRAVEL_M, TerrainPlannerConfig
 from footfall.planning.step_plan import FootholdPlan, NoFoothold, StepPoses
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose, inclined_to_level
+from footfall.robot.scale import robot_scale
 from footfall.robot.spec import HexapodSpec
 from footfall.scoring.walkability import ScoreMap
-
-# A step whose body travels less than this from now to lift-off is a step in place [m].
-IN_PLACE_TRAVEL_M = 0.02
-
-
-@dataclass(frozen=True)
-class TerrainPlannerConfig:
-    """Planner settings.
-
-    Attributes:
-        footholds: Search radius and stability margin.
-        reach_margin: Footholds keep this far inside each leg's workspace [m].
-        swing_clearance: Least gap between a swinging foot's underside and the mapped
-            terrain along its path [m].
-        body_clearance: Gap the body keeps between its underside and the mapped terrain
-            under it when the legs allow [m].
-        min_body_clearance: Least gap, never given up: a foothold that needs a lower body
-            is refused [m].
-        registration_horizon_s: How long a mapped cell stays in use: from the camera
-            seeing it ahead of the front legs until the hind feet have stepped past it
-            (body length and look-ahead over the walking speed) [s]. The map may slide
-            under the feet by as much as the controller's world moved against its
-            odometry over this time (see :attr:`TerrainPlanner.registration_error_m`).
-    """
-
-    footholds: FootholdConfig = field(default_factory=FootholdConfig)
-    reach_margin: float = 0.02
-    swing_clearance: float = 0.03
-    body_clearance: float = 0.03
-    min_body_clearance: float = 0.01
-    registration_horizon_s: float = 5.0
-
-    def __post_init__(self) -> None:
-        require_non_negative(
-            "planner",
-            reach_margin=self.reach_margin,
-            swing_clearance=self.swing_clearance,
-            min_body_clearance=self.min_body_clearance,
-        )
-        require_positive("planner", registration_horizon_s=self.registration_horizon_s)
-        if self.body_clearance < self.min_body_clearance:
-            raise ConfigError("body_clearance must be at least min_body_clearance")
 
 
 class TerrainPlanner:
@@ -98,11 +54,13 @@ class TerrainPlanner:
         region_jumps: Re-plans that moved a leg's foothold to another steppable region,
             no farther inside it, while the foothold planned before still served (valid,
             reached and stable): flips across an edge, which the search should never make.
+        in_place_travel_m: A step whose body travels less than this is a step in place [m].
     """
 
     def __init__(self, spec: HexapodSpec, config: TerrainPlannerConfig | None = None) -> None:
         self.spec = spec
-        self.config = config or TerrainPlannerConfig()
+        self.config = (config or TerrainPlannerConfig()).for_robot(spec)
+        self.in_place_travel_m = IN_PLACE_TRAVEL_M * robot_scale(spec).stride
         self.kinematics = LegKinematics(spec)
         self.snapshot: MapSnapshot | None = None
         self.scores: ScoreMap | None = None
@@ -223,7 +181,7 @@ class TerrainPlanner:
         # A foothold is reached from the body now (it may stop at any time) to lift-off.
         reach_poses = (poses.now, poses.touchdown, poses.liftoff)
         in_place = all(
-            math.hypot(p.x - poses.now.x, p.y - poses.now.y) < IN_PLACE_TRAVEL_M
+            math.hypot(p.x - poses.now.x, p.y - poses.now.y) < self.in_place_travel_m
             for p in (poses.touchdown, poses.liftoff)
         )
         # Its leg clears the terrain while the foot stands, from touchdown to lift-off.

@@ -163,7 +163,7 @@ def prepare_walk(request: WalkRequest) -> WalkJob:
     spec = apply_settings(load_spec(request.robot), "robot", request.overrides)
     gait = GaitConfig(kind=request.gait, swing=request.swing, stride_length=request.stride)
     gait = apply_settings(gait, "gait", request.overrides)
-    max_speed = gait.for_robot(spec.stride_length, spec.max_step_height).max_speed
+    max_speed = gait.for_robot(spec).max_speed
     speed = min(DEFAULT_SPEED_MPS, 0.75 * max_speed) if request.speed is None else request.speed
     if speed > max_speed + 1e-12:
         raise ConfigError(
