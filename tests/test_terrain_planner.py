@@ -9,9 +9,8 @@ from hypothesis import strategies as st
 
 from footfall.mapping.snapshot import MapSnapshot
 from footfall.planning.footholds import FootholdConfig
-from footfall.planning.planner_config import TerrainPlannerConfig
 from footfall.planning.step_plan import NoFoothold, StepPoses
-from footfall.planning.terrain_planner import TerrainPlanner
+from footfall.planning.terrain_planner import TerrainPlanner, TerrainPlannerConfig
 from footfall.robot.kinematics import LegKinematics
 from footfall.robot.planar import PlanarPose
 from footfall.robot.spec import load_spec

@@ -68,7 +68,7 @@ _EXPORTS = {
     "SingularConfigurationError": "footfall.errors",
     "SwingTrajectory": "footfall.motion.swing",
     "TerrainPlanner": "footfall.planning.terrain_planner",
-    "TerrainPlannerConfig": "footfall.planning.planner_config",
+    "TerrainPlannerConfig": "footfall.planning.terrain_planner",
     "UnreachableTargetError": "footfall.errors",
     "walk_metrics": "footfall.metrics",
     "WalkCommand": "footfall.messages",
@@ -121,8 +121,8 @@ if TYPE_CHECKING:
     from footfall.nodes.servo import ServoNode as ServoNode
     from footfall.planning.footholds import FootholdConfig as FootholdConfig
     from footfall.planning.footholds import FootholdSearch as FootholdSearch
-    from footfall.planning.planner_config import TerrainPlannerConfig as TerrainPlannerConfig
     from footfall.planning.terrain_planner import TerrainPlanner as TerrainPlanner
+    from footfall.planning.terrain_planner import TerrainPlannerConfig as TerrainPlannerConfig
     from footfall.robot.kinematics import LegKinematics as LegKinematics
     from footfall.robot.planar import PlanarPose as PlanarPose
     from footfall.robot.spec import HexapodSpec as HexapodSpec

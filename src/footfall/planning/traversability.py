@@ -52,6 +52,7 @@ from footfall.errors import ConfigError
 from footfall.messages import MapUpdate
 from footfall.planning import cost_kernels
 from footfall.planning.cost_kernels import octagon_half_widths
+from footfall.robot.scale import feet_span_m
 from footfall.robot.spec import HexapodSpec
 
 _SQUARE = np.ones((3, 3), dtype=bool)
@@ -119,8 +120,7 @@ def span_radius(spec: HexapodSpec, margin_m: float = 0.05) -> float:
     The margin covers a foot half a stride ahead of its rest position and a route followed
     a few centimetres off.
     """
-    feet = spec.rest_feet_in_body()[:, :2]
-    return float(np.max(np.hypot(feet[:, 0], feet[:, 1]))) + spec.foot_radius + margin_m
+    return feet_span_m(spec) + margin_m
 
 
 def longest_gap(spec: HexapodSpec, search_radius_m: float) -> float:

@@ -13,7 +13,7 @@ section                 configuration
 ``scoring``             :class:`~footfall.scoring.walkability.ScoreConfig`
 ``mapping``             :class:`~footfall.mapping.engine.HeightMapConfig`:
                         ``mapping.resolution``, ``mapping.drift.enabled``
-``planner``             :class:`~footfall.planning.planner_config.TerrainPlannerConfig`:
+``planner``             :class:`~footfall.planning.terrain_planner.TerrainPlannerConfig`:
                         ``planner.footholds.search_radius``
 ``navigation``          :class:`~footfall.planning.navigation.NavigationConfig`
 ``feedback``            :class:`~footfall.motion.feedback.FeedbackConfig`

@@ -16,7 +16,7 @@ from footfall.motion.feedback import FeedbackConfig
 from footfall.motion.gait import GaitConfig
 from footfall.nodes.sources import CAMERAS, POSES
 from footfall.planning.navigation import NavigationConfig
-from footfall.planning.planner_config import TerrainPlannerConfig
+from footfall.planning.terrain_planner import TerrainPlannerConfig
 from footfall.runtime.fault_spec import FaultSpec
 from footfall.scoring.walkability import ScoreConfig, ScoreMap
 from footfall.sim.model import CameraMount
